@@ -1,0 +1,45 @@
+# Warning flags for ctcal's own targets (never applied to third-party headers, which are SYSTEM).
+function(ctcal_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
+                                           -Wno-unused-parameter)
+  if(CTCAL_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()
+
+# ctcal_library(NAME SOURCES a.cpp b.cpp DEPS x y [PRIVATE_DEPS z])
+# A library folder: public headers under <folder>/include/ctcal/<name>/.
+function(ctcal_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  if(ARG_SOURCES)
+    add_library(ctcal_${name} STATIC ${ARG_SOURCES})
+    target_include_directories(ctcal_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    target_link_libraries(ctcal_${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+    set_target_properties(ctcal_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+    ctcal_warnings(ctcal_${name})
+  else()
+    add_library(ctcal_${name} INTERFACE)
+    target_include_directories(ctcal_${name} INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    target_link_libraries(ctcal_${name} INTERFACE ${ARG_DEPS})
+  endif()
+  add_library(ctcal::${name} ALIAS ctcal_${name})
+endfunction()
+
+# ctcal_test(NAME SOURCES a.cpp DEPS ctcal::spline [LABELS unit])
+# One GoogleTest executable per unit; each TEST becomes its own CTest test.
+function(ctcal_test name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
+  target_compile_definitions(${name} PRIVATE
+    CTCAL_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    CTCAL_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
+    CTCAL_BINARY="${CMAKE_BINARY_DIR}/bin/ctcal")
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  ctcal_warnings(${name})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
+                       PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+endfunction()
