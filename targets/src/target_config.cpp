@@ -1,0 +1,122 @@
+#include "ctcal/targets/target_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+#include <stdexcept>
+
+namespace ctcal {
+namespace {
+
+[[noreturn]] void Fail(const std::string& context, const std::string& what) {
+  throw std::runtime_error(context + ": target: " + what);
+}
+
+template <typename T>
+T Required(const YAML::Node& node, const std::string& key, const std::string& context) {
+  if (!node[key])
+    Fail(context, "missing required key '" + key + "'");
+  try {
+    return node[key].as<T>();
+  } catch (const YAML::Exception&) {
+    Fail(context, "key '" + key + "' has a value of the wrong type");
+  }
+}
+
+}  // namespace
+
+TargetConfig ParseTargetConfig(const YAML::Node& node, const std::string& context) {
+  if (!node || !node.IsMap())
+    Fail(context, "expected a map with target_type and its keys");
+  const std::string type = Required<std::string>(node, "target_type", context);
+  TargetConfig t;
+  std::set<std::string> allowed = {"target_type"};
+  if (type == "aprilgrid") {
+    t.type = TargetType::kAprilGrid;
+    allowed.insert({"tagCols", "tagRows", "tagSize", "tagSpacing", "blackTagBorder", "codeOffset"});
+    t.tag_cols = Required<int>(node, "tagCols", context);
+    t.tag_rows = Required<int>(node, "tagRows", context);
+    t.tag_size = Required<double>(node, "tagSize", context);
+    t.tag_spacing = Required<double>(node, "tagSpacing", context);
+    if (node["blackTagBorder"])
+      t.black_tag_border = Required<int>(node, "blackTagBorder", context);
+    if (node["codeOffset"] && Required<int>(node, "codeOffset", context) != 0) {
+      Fail(context, "codeOffset other than 0 is not supported");
+    }
+    if (t.tag_cols < 1 || t.tag_rows < 1)
+      Fail(context, "tagCols and tagRows must be >= 1");
+    if (!(t.tag_size > 0.0))
+      Fail(context, "tagSize must be > 0 (metres)");
+    if (!(t.tag_spacing > 0.0))
+      Fail(context, "tagSpacing must be > 0 (ratio gap / tagSize)");
+    if (t.black_tag_border != 1 && t.black_tag_border != 2) {
+      Fail(context, "blackTagBorder must be 1 or 2");
+    }
+  } else if (type == "checkerboard") {
+    t.type = TargetType::kCheckerboard;
+    allowed.insert({"targetCols", "targetRows", "rowSpacingMeters", "colSpacingMeters"});
+    t.target_cols = Required<int>(node, "targetCols", context);
+    t.target_rows = Required<int>(node, "targetRows", context);
+    t.row_spacing_m = Required<double>(node, "rowSpacingMeters", context);
+    t.col_spacing_m = Required<double>(node, "colSpacingMeters", context);
+    if (t.target_cols < 2 || t.target_rows < 2) {
+      Fail(context, "targetCols and targetRows (inner corners) must be >= 2");
+    }
+    if (!(t.row_spacing_m > 0.0) || !(t.col_spacing_m > 0.0)) {
+      Fail(context, "rowSpacingMeters and colSpacingMeters must be > 0");
+    }
+  } else {
+    Fail(context, "unknown target_type '" + type + "' (expected aprilgrid or checkerboard)");
+  }
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    if (!allowed.count(key))
+      Fail(context, "unknown key '" + key + "' for " + type);
+  }
+  return t;
+}
+
+TargetConfig LoadTargetConfig(const std::string& path) {
+  YAML::Node node;
+  try {
+    node = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error(path + ": cannot open target file");
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": line " + std::to_string(e.mark.line + 1) +
+                             ": malformed YAML: " + e.msg);
+  }
+  return ParseTargetConfig(node, path);
+}
+
+void EmitTargetConfig(const TargetConfig& t, YAML::Emitter& out) {
+  out << YAML::BeginMap;
+  if (t.type == TargetType::kAprilGrid) {
+    out << YAML::Key << "target_type" << YAML::Value << "aprilgrid";
+    out << YAML::Key << "tagCols" << YAML::Value << t.tag_cols;
+    out << YAML::Key << "tagRows" << YAML::Value << t.tag_rows;
+    out << YAML::Key << "tagSize" << YAML::Value << t.tag_size;
+    out << YAML::Key << "tagSpacing" << YAML::Value << t.tag_spacing;
+    out << YAML::Key << "blackTagBorder" << YAML::Value << t.black_tag_border;
+  } else {
+    out << YAML::Key << "target_type" << YAML::Value << "checkerboard";
+    out << YAML::Key << "targetCols" << YAML::Value << t.target_cols;
+    out << YAML::Key << "targetRows" << YAML::Value << t.target_rows;
+    out << YAML::Key << "rowSpacingMeters" << YAML::Value << t.row_spacing_m;
+    out << YAML::Key << "colSpacingMeters" << YAML::Value << t.col_spacing_m;
+  }
+  out << YAML::EndMap;
+}
+
+void SaveTargetConfig(const TargetConfig& target, const std::string& path) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  EmitTargetConfig(target, out);
+  std::ofstream f(path);
+  if (!f)
+    throw std::runtime_error(path + ": cannot write target file");
+  f << out.c_str() << "\n";
+}
+
+}  // namespace ctcal
