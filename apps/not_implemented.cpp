@@ -1,5 +1,6 @@
-// Subcommands whose issue has not landed yet say so and exit 2. Each moves to its own
-// cmd_<name>.cpp when implemented (and is removed from here).
+// Subcommands whose issue has not landed yet say so and exit 2. The definitions are weak so that a
+// cmd_<name>.cpp implementing one replaces it without touching this file while issues land in
+// parallel; a stub is deleted here once its command exists.
 #include <cstdio>
 #include <cstring>
 
@@ -21,25 +22,27 @@ int NotYet(const char* name, int argc, char** argv) {
 
 }  // namespace
 
-int RunSimulate(int argc, char** argv) {
+#define CTCAL_STUB __attribute__((weak))
+
+CTCAL_STUB int RunSimulate(int argc, char** argv) {
   return NotYet("simulate", argc, argv);
 }
-int RunDetect(int argc, char** argv) {
+CTCAL_STUB int RunDetect(int argc, char** argv) {
   return NotYet("detect", argc, argv);
 }
-int RunCalibrate(int argc, char** argv) {
+CTCAL_STUB int RunCalibrate(int argc, char** argv) {
   return NotYet("calibrate", argc, argv);
 }
-int RunCompare(int argc, char** argv) {
+CTCAL_STUB int RunCompare(int argc, char** argv) {
   return NotYet("compare", argc, argv);
 }
-int RunReport(int argc, char** argv) {
+CTCAL_STUB int RunReport(int argc, char** argv) {
   return NotYet("report", argc, argv);
 }
-int RunMonteCarlo(int argc, char** argv) {
+CTCAL_STUB int RunMonteCarlo(int argc, char** argv) {
   return NotYet("montecarlo", argc, argv);
 }
-int RunTarget(int argc, char** argv) {
+CTCAL_STUB int RunTarget(int argc, char** argv) {
   return NotYet("target", argc, argv);
 }
 
