@@ -1,23 +1,25 @@
 // Subcommands whose issue has not landed yet say so and exit 2. The definitions are weak so that a
 // cmd_<name>.cpp implementing one replaces it without touching this file while issues land in
-// parallel; a stub is deleted here once its command exists.
+// parallel; a stub is deleted here once its command exists. `--help` prints the SPEC section 8
+// synopsis and exits 0, like every implemented subcommand.
 #include <cstdio>
 #include <cstring>
 
+#include "cli_common.h"
 #include "commands.h"
 
 namespace ctcal::app {
 namespace {
 
-int NotYet(const char* name, int argc, char** argv) {
+int NotYet(const char* name, const char* synopsis, int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--help") == 0) {
-      std::printf("ctcal %s: not implemented yet in this version\n", name);
-      return 0;
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::printf("usage: ctcal %s %s\n\nnot implemented yet in this version\n", name, synopsis);
+      return kExitOk;
     }
   }
-  std::fprintf(stderr, "ctcal %s: not implemented yet in this version\n", name);
-  return 2;
+  std::fprintf(stderr, "ctcal %s: error: not implemented yet in this version\n", name);
+  return kExitBadInput;
 }
 
 }  // namespace
@@ -25,25 +27,27 @@ int NotYet(const char* name, int argc, char** argv) {
 #define CTCAL_STUB __attribute__((weak))
 
 CTCAL_STUB int RunSimulate(int argc, char** argv) {
-  return NotYet("simulate", argc, argv);
+  return NotYet("simulate", "--scenario NAME --seed N --out DATA [--duration S] [--images]", argc,
+                argv);
 }
 CTCAL_STUB int RunDetect(int argc, char** argv) {
-  return NotYet("detect", argc, argv);
+  return NotYet("detect", "--target TARGET.yaml --data DATA [--camera cam0]", argc, argv);
 }
 CTCAL_STUB int RunCalibrate(int argc, char** argv) {
-  return NotYet("calibrate", argc, argv);
+  return NotYet("calibrate", "--rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both]",
+                argc, argv);
 }
 CTCAL_STUB int RunCompare(int argc, char** argv) {
-  return NotYet("compare", argc, argv);
+  return NotYet("compare", "--truth TRUTH.yaml --result RESULT.yaml [--json OUT.json]", argc, argv);
 }
 CTCAL_STUB int RunReport(int argc, char** argv) {
-  return NotYet("report", argc, argv);
+  return NotYet("report", "--out OUT", argc, argv);
 }
 CTCAL_STUB int RunMonteCarlo(int argc, char** argv) {
-  return NotYet("montecarlo", argc, argv);
+  return NotYet("montecarlo", "--scenario NAME --runs N --out DIR", argc, argv);
 }
 CTCAL_STUB int RunTarget(int argc, char** argv) {
-  return NotYet("target", argc, argv);
+  return NotYet("target", "--target TARGET.yaml --out board.pdf", argc, argv);
 }
 
 }  // namespace ctcal::app
