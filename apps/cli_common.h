@@ -52,8 +52,10 @@ class CommandLine {
   std::optional<int> Parse(int argc, char** argv) {
     namespace po = boost::program_options;
     try {
+      const po::positional_options_description no_positionals;
       po::store(po::command_line_parser(argc - 1, argv + 1)
                     .options(options_)
+                    .positional(no_positionals)
                     .style(po::command_line_style::default_style &
                            ~po::command_line_style::allow_guessing)
                     .run(),
