@@ -1,0 +1,47 @@
+// Pieces shared by the camera projection models (camera_pinhole.h, camera_omni.h,
+// camera_double_sphere.h, camera_eucm.h): the model enumeration, the Jacobian out-pointer type and
+// the final check of every unprojection.
+//
+// Conventions of SPEC sections 1, 2 and 4: camera frame x right, y down, z forward; pixel (0,0)
+// is the centre of the top-left pixel, so the image covers [-0.5, width-0.5] x [-0.5, height-0.5].
+// A model's parameter vector is its Kalibr `intrinsics` followed by its `distortion_coeffs`, one
+// contiguous block (one Ceres parameter block per camera).
+#pragma once
+
+#include <Eigen/Core>
+#include <type_traits>
+
+namespace ctcal {
+
+// Every (camera_model, distortion_model) pair of SPEC section 4.
+enum class CameraModelType {
+  kPinholeRadtan,
+  kPinholeEquidistant,
+  kPinholeNone,
+  kOmniRadtan,
+  kOmniNone,
+  kDoubleSphere,
+  kEucm,
+};
+
+// Out-pointer for a Jacobian d out / d in with the scalar of the call. The scalar sits in a
+// non-deduced context so that a literal nullptr ("don't compute") can be passed.
+template <typename T, int Rows, int Cols>
+using JacobianPtr = typename std::common_type<Eigen::Matrix<T, Rows, Cols>>::type*;
+
+// Closed-form and iterative unprojections alike end with this check: the ray must project back
+// (validly) onto the pixel it came from. It catches a ray on the wrong branch of a model (e.g. the
+// second intersection of omni's sphere for xi > 1) and any iteration that stopped early. The
+// tolerance is loose on purpose: it separates right from wrong answers; the accuracy of a correct
+// one is ~1e-12 px (tests/cameras).
+inline constexpr double kUnprojectionCheckPx = 1e-6;
+
+template <class Model>
+bool ReprojectsOnto(const double* params, const Eigen::Vector3d& ray_C, const Eigen::Vector2d& uv) {
+  Eigen::Vector2d uv_back;
+  if (!ray_C.allFinite() || !Model::Project(params, ray_C, &uv_back))
+    return false;
+  return (uv_back - uv).norm() <= kUnprojectionCheckPx;
+}
+
+}  // namespace ctcal
