@@ -1,0 +1,920 @@
+#include "ctcal/sensors/rig_yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+
+#include "ctcal/sensors/number_format.h"
+#include "ctcal/sensors/parameter_names.h"
+#include "yaml_in.h"
+
+namespace ctcal {
+
+using internal::YamlIn;
+
+int IntrinsicsCount(const std::string& camera_model) {
+  if (camera_model == "pinhole")
+    return 4;
+  if (camera_model == "omni")
+    return 5;
+  if (camera_model == "ds" || camera_model == "eucm")
+    return 6;
+  return -1;
+}
+
+int DistortionCount(const std::string& distortion_model) {
+  if (distortion_model == "radtan" || distortion_model == "equidistant")
+    return 4;
+  if (distortion_model == "none")
+    return 0;
+  return -1;
+}
+
+namespace {
+
+const std::set<std::string> kImuNoiseKeys = {"gyroscope_noise_density", "gyroscope_random_walk",
+                                             "accelerometer_noise_density",
+                                             "accelerometer_random_walk", "update_rate"};
+const std::set<std::string> kGyroNoiseKeys = {"gyroscope_noise_density", "gyroscope_random_walk",
+                                              "update_rate"};
+
+std::string Where(const std::string& sensor) {
+  return "sensors." + sensor;
+}
+
+int DwCount(const SensorConfig& s) {
+  if (s.type == SensorType::kGyro)
+    return s.gyro_model == GyroModel::kFull ? 9 : (s.gyro_model == GyroModel::kUpper ? 6 : 0);
+  if (s.imu_model == ImuModel::kNone)
+    return 0;
+  return s.imu_model == ImuModel::kImu3 ? 9 : 6;
+}
+
+int DaCount(const SensorConfig& s) {
+  if (s.type != SensorType::kImu || s.imu_model == ImuModel::kNone)
+    return 0;
+  return s.imu_model == ImuModel::kImu4 ? 9 : 6;
+}
+
+int TgCount(const SensorConfig& s) {
+  if (s.type != SensorType::kImu)
+    return 0;
+  return s.g_sensitivity == GSensitivity::kFull ? 9
+                                                : (s.g_sensitivity == GSensitivity::kUpper ? 6 : 0);
+}
+
+const char* StoredForm(int count) {
+  return count == 9 ? "9 numbers, full row-major" : "6 numbers, upper-triangular column-wise";
+}
+
+// --- reading -----------------------------------------------------------------------------------
+
+class RigReader {
+ public:
+  RigReader(const std::string& file, std::vector<std::string>* warnings)
+      : in_(file), warnings_(warnings) {}
+
+  RigConfig Read(const YAML::Node& root) {
+    if (!root.IsMap())
+      in_.Fail(root, "", "expected a rig file: a map with base_imu, target and sensors");
+    in_.CheckKeys(root, "",
+                  {"base_imu", "gravity_magnitude", "target", "sensors", "gravity_W", "sigma",
+                   "solver", "residuals", "observability"},
+                  "a rig file");
+    for (const char* key : {"base_imu", "target", "sensors"}) {
+      if (!root[key])
+        in_.Fail(root, "", std::string("missing required key '") + key + "'");
+    }
+    RigConfig rig;
+    rig.base_imu = in_.String(root["base_imu"], "base_imu");
+    if (root["gravity_magnitude"]) {
+      rig.gravity_magnitude = in_.FiniteDouble(root["gravity_magnitude"], "gravity_magnitude");
+      if (!(rig.gravity_magnitude > 0.0))
+        in_.Fail(root["gravity_magnitude"], "gravity_magnitude", "must be > 0 (m/s^2)");
+    }
+    try {
+      rig.target = ParseTargetConfig(root["target"], in_.file());
+    } catch (const std::runtime_error& e) {
+      // The target parser names the file; add the line of the target block.
+      in_.Fail(root["target"], "", std::string(e.what()).substr(in_.file().size() + 2));
+    }
+
+    const YAML::Node sensors = root["sensors"];
+    if (!sensors.IsMap() || sensors.size() == 0)
+      in_.Fail(sensors, "sensors", "expected a map of sensor names to sensors");
+    // First pass: names and types, which decide what every sensor may contain.
+    std::set<std::string> names;
+    bool has_imu = false;
+    for (const auto& kv : sensors) {
+      const std::string name = in_.String(kv.first, "sensors");
+      if (name.empty() || name == "groundtruth")
+        in_.Fail(kv.first, "sensors", "'" + name + "' cannot name a sensor (reserved)");
+      if (!names.insert(name).second)
+        in_.Fail(kv.first, "sensors", "sensor '" + name + "' is given twice");
+      in_.RequireMap(kv.second, Where(name));
+      if (!kv.second["type"])
+        in_.Fail(kv.second, Where(name), "missing required key 'type' (imu, gyro or camera)");
+      SensorConfig s;
+      s.name = name;
+      s.type = Parse(kv.second["type"], Where(name), "type", ParseSensorType);
+      has_imu = has_imu || s.type == SensorType::kImu;
+      rig.sensors.push_back(s);
+    }
+    if (!names.count(rig.base_imu)) {
+      in_.Fail(root["base_imu"], "base_imu",
+               "names no sensor: '" + rig.base_imu + "' is not under sensors");
+    }
+    camera_only_ = !has_imu;
+
+    std::size_t i = 0;
+    for (const auto& kv : sensors)
+      ReadSensor(kv.second, rig.sensors[i++], rig.base_imu);
+    // Second pass: sigma blocks, whose keys depend on the whole rig (base, camera-only).
+    i = 0;
+    for (const auto& kv : sensors) {
+      SensorConfig& s = rig.sensors[i++];
+      if (kv.second["prior_sigma"])
+        s.prior_sigma = ReadSigma(kv.second["prior_sigma"], rig, s, "prior_sigma");
+      if (kv.second["sigma"])
+        s.sigma = ReadSigma(kv.second["sigma"], rig, s, "sigma");
+    }
+
+    if (root["gravity_W"])
+      rig.gravity_W = in_.Vector3(root["gravity_W"], "gravity_W");
+    if (root["sigma"]) {
+      in_.CheckKeys(root["sigma"], "sigma", {"gravity_W"}, "the top-level sigma");
+      if (root["sigma"]["gravity_W"]) {
+        const std::vector<double> v =
+            ReadSigmaValues(root["sigma"]["gravity_W"], "sigma.gravity_W", 3, false, "sigma");
+        rig.sigma_gravity_W = Eigen::Vector3d(v[0], v[1], v[2]);
+      }
+    }
+    if (root["solver"])
+      rig.solver = ReadSolver(root["solver"]);
+    if (root["residuals"])
+      ReadResiduals(root["residuals"], &rig);
+    if (root["observability"])
+      rig.observability = ReadObservability(root["observability"]);
+
+    ValidateRig(rig, in_.file());
+    return rig;
+  }
+
+ private:
+  template <typename R>
+  R Parse(const YAML::Node& node, const std::string& where, const std::string& key,
+          R (*parse)(const std::string&)) const {
+    try {
+      return parse(in_.String(node, where + "." + key));
+    } catch (const std::invalid_argument& e) {
+      in_.Fail(node, where, key + ": " + e.what());
+    }
+  }
+
+  void Warn(const std::string& what) {
+    const std::string line = in_.file() + ": warning: " + what;
+    if (warnings_)
+      warnings_->push_back(line);
+    else
+      std::cerr << line << "\n";
+  }
+
+  std::vector<double> ReadStored(const YAML::Node& node, const std::string& where,
+                                 const std::string& key, int count, const std::string& model) {
+    if (!node.IsSequence())
+      in_.Fail(node, where, key + ": expected a list of " + std::string(StoredForm(count)));
+    if (static_cast<int>(node.size()) != count) {
+      in_.Fail(node, where,
+               key + " of " + model + " has " + StoredForm(count) + ", got " +
+                   std::to_string(node.size()));
+    }
+    return in_.Vector(node, where + "." + key, count);
+  }
+
+  void ReadSensor(const YAML::Node& node, SensorConfig& s, const std::string& base) {
+    const std::string where = Where(s.name);
+    const bool is_base = s.name == base;
+    std::set<std::string> allowed = {"type",        "noise", "estimate",
+                                     "prior_sigma", "sigma", "rostopic"};
+    std::string kind;
+    switch (s.type) {
+      case SensorType::kImu:
+        allowed.insert({"model", "g_sensitivity", "Dw", "Da", "Tg", "R_I_a", "R_I_w"});
+        kind = "a sensor of type imu";
+        break;
+      case SensorType::kGyro:
+        allowed.insert({"model", "Dw"});
+        kind = "a sensor of type gyro";
+        for (const char* key : {"Da", "Tg", "R_I_a", "R_I_w", "g_sensitivity"}) {
+          if (node[key]) {
+            in_.Fail(node[key], where,
+                     std::string("a gyroscope-only sensor has no ") + key +
+                         " (only Dw and its bias; SPEC section 3)");
+          }
+        }
+        break;
+      case SensorType::kCamera:
+        allowed.insert({"camera_model", "intrinsics", "distortion_model", "distortion_coeffs",
+                        "resolution", "line_delay"});
+        kind = "a sensor of type camera";
+        break;
+    }
+    if (is_base) {
+      for (const char* key : {"T_B_S", "time_offset"}) {
+        if (node[key]) {
+          in_.Fail(node[key], where,
+                   std::string(key) +
+                       " is not allowed on the base sensor (its frame is B, its "
+                       "clock the reference)");
+        }
+      }
+    } else {
+      allowed.insert({"T_B_S", "time_offset"});
+    }
+    in_.CheckKeys(node, where, allowed, kind);
+
+    if (s.type == SensorType::kImu)
+      ReadImu(node, s);
+    else if (s.type == SensorType::kGyro)
+      ReadGyro(node, s);
+    else
+      ReadCamera(node, s);
+
+    if (!is_base) {
+      if (node["T_B_S"]) {
+        s.T_B_S = in_.Rigid(node["T_B_S"], where + ".T_B_S");
+      } else {
+        Warn(where +
+             ": no T_B_S given, using identity (give a guess: the calibration starts "
+             "from it)");
+      }
+      if (node["time_offset"])
+        s.time_offset = in_.FiniteDouble(node["time_offset"], where + ".time_offset");
+    }
+
+    if (node["estimate"]) {
+      const YAML::Node est = node["estimate"];
+      if (!est.IsSequence() && !est.IsNull())
+        in_.Fail(est, where, "estimate: expected a list such as [extrinsics, time_offset]");
+      for (const auto& item : est) {
+        const EstimateItem e = Parse(item, where, "estimate", ParseEstimateItem);
+        if (!s.estimate.insert(e).second)
+          in_.Fail(item, where, "estimate: '" + ToString(e) + "' is listed twice");
+      }
+    } else if (!is_base) {
+      s.estimate = {EstimateItem::kExtrinsics};
+      // A camera-only rig pairs frames by stamp and estimates no time offset (SPEC section 7).
+      if (!camera_only_)
+        s.estimate.insert(EstimateItem::kTimeOffset);
+    }
+    if (node["rostopic"])
+      s.rostopic = in_.String(node["rostopic"], where + ".rostopic");
+  }
+
+  void ReadInertialNoise(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name) + ".noise";
+    if (!node)
+      in_.Fail(node, Where(s.name), "missing required key 'noise' (Kalibr's noise keys)");
+    const bool gyro = s.type == SensorType::kGyro;
+    const std::set<std::string>& keys = gyro ? kGyroNoiseKeys : kImuNoiseKeys;
+    in_.CheckKeys(node, where, keys, gyro ? "the noise of a gyro" : "the noise of an imu");
+    std::map<std::string, double> v;
+    for (const std::string& key : keys) {
+      if (!node[key])
+        in_.Fail(node, where, "missing required key '" + key + "'");
+      v[key] = in_.FiniteDouble(node[key], where + "." + key);
+      if (v[key] < 0.0)
+        in_.Fail(node[key], where, key + " must be >= 0");
+    }
+    if (!(v["update_rate"] > 0.0))
+      in_.Fail(node["update_rate"], where, "update_rate must be > 0 (Hz)");
+    s.noise.gyroscope_noise_density = v["gyroscope_noise_density"];
+    s.noise.gyroscope_random_walk = v["gyroscope_random_walk"];
+    s.noise.update_rate = v["update_rate"];
+    if (!gyro) {
+      s.noise.accelerometer_noise_density = v["accelerometer_noise_density"];
+      s.noise.accelerometer_random_walk = v["accelerometer_random_walk"];
+    }
+  }
+
+  void ReadImu(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name);
+    if (node["model"])
+      s.imu_model = Parse(node["model"], where, "model", ParseImuModel);
+    if (node["g_sensitivity"])
+      s.g_sensitivity = Parse(node["g_sensitivity"], where, "g_sensitivity", ParseGSensitivity);
+    const std::string model = "model " + ToString(s.imu_model);
+    if (s.imu_model == ImuModel::kNone && s.g_sensitivity != GSensitivity::kNone)
+      in_.Fail(node["g_sensitivity"], where, "g_sensitivity must be none with model none");
+    const std::string rot = RotationKey(s.imu_model);
+    for (const char* key : {"Dw", "Da"}) {
+      if (node[key] && s.imu_model == ImuModel::kNone)
+        in_.Fail(node[key], where, std::string(key) + " is not a parameter of model none");
+    }
+    for (const char* key : {"R_I_a", "R_I_w"}) {
+      if (node[key] && rot != key) {
+        in_.Fail(node[key], where,
+                 std::string(key) + " is not a parameter of " + model +
+                     (rot.empty() ? " (it has no rotation)" : " (it estimates " + rot + ")"));
+      }
+    }
+    if (node["Tg"] && s.g_sensitivity == GSensitivity::kNone)
+      in_.Fail(node["Tg"], where, "Tg is given but g_sensitivity is none");
+
+    const int dw = DwCount(s), da = DaCount(s), tg = TgCount(s);
+    if (dw > 0)
+      s.D_w = node["Dw"] ? ReadStored(node["Dw"], where, "Dw", dw, model) : IdentityStored(dw);
+    if (da > 0)
+      s.D_a = node["Da"] ? ReadStored(node["Da"], where, "Da", da, model) : IdentityStored(da);
+    if (tg > 0) {
+      s.T_g = node["Tg"] ? ReadStored(node["Tg"], where, "Tg", tg,
+                                      "g_sensitivity " + ToString(s.g_sensitivity))
+                         : std::vector<double>(static_cast<std::size_t>(tg), 0.0);
+    }
+    if (rot == "R_I_a" && node["R_I_a"])
+      s.R_I_a = in_.Rotation(node["R_I_a"], where + ".R_I_a");
+    if (rot == "R_I_w" && node["R_I_w"])
+      s.R_I_w = in_.Rotation(node["R_I_w"], where + ".R_I_w");
+    ReadInertialNoise(node["noise"], s);
+  }
+
+  void ReadGyro(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name);
+    if (node["model"])
+      s.gyro_model = Parse(node["model"], where, "model", ParseGyroModel);
+    const int dw = DwCount(s);
+    if (node["Dw"] && dw == 0)
+      in_.Fail(node["Dw"], where, "Dw is not a parameter of gyro model none");
+    if (dw > 0) {
+      s.D_w = node["Dw"]
+                  ? ReadStored(node["Dw"], where, "Dw", dw, "gyro model " + ToString(s.gyro_model))
+                  : IdentityStored(dw);
+    }
+    ReadInertialNoise(node["noise"], s);
+  }
+
+  void ReadCamera(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name);
+    for (const char* key : {"camera_model", "intrinsics", "resolution"}) {
+      if (!node[key])
+        in_.Fail(node, where, std::string("missing required key '") + key + "'");
+    }
+    s.camera_model = in_.String(node["camera_model"], where + ".camera_model");
+    const int n_intrinsics = IntrinsicsCount(s.camera_model);
+    if (n_intrinsics < 0) {
+      in_.Fail(node["camera_model"], where,
+               "unknown camera_model '" + s.camera_model + "' (expected pinhole, omni, ds, eucm)");
+    }
+    if (node["distortion_model"])
+      s.distortion_model = in_.String(node["distortion_model"], where + ".distortion_model");
+    const int n_dist = DistortionCount(s.distortion_model);
+    if (n_dist < 0) {
+      in_.Fail(node["distortion_model"], where,
+               "unknown distortion_model '" + s.distortion_model +
+                   "' (expected radtan, equidistant, none)");
+    }
+    const bool combo_ok = (s.camera_model == "pinhole") ||
+                          (s.camera_model == "omni" && s.distortion_model != "equidistant") ||
+                          s.distortion_model == "none";
+    if (!combo_ok) {
+      in_.Fail(node["distortion_model"], where,
+               "camera_model " + s.camera_model + " does not take distortion_model " +
+                   s.distortion_model + " (SPEC section 4)");
+    }
+    if (!node["intrinsics"].IsSequence() ||
+        static_cast<int>(node["intrinsics"].size()) != n_intrinsics) {
+      in_.Fail(node["intrinsics"], where,
+               "intrinsics of camera_model " + s.camera_model + " are " +
+                   std::to_string(n_intrinsics) + " numbers, got " +
+                   (node["intrinsics"].IsSequence() ? std::to_string(node["intrinsics"].size())
+                                                    : std::string("no list")));
+    }
+    s.intrinsics = in_.Vector(node["intrinsics"], where + ".intrinsics", n_intrinsics);
+    if (node["distortion_coeffs"]) {
+      const YAML::Node d = node["distortion_coeffs"];
+      if (!d.IsSequence() || static_cast<int>(d.size()) != n_dist) {
+        in_.Fail(d, where,
+                 "distortion_coeffs of distortion_model " + s.distortion_model + " are " +
+                     std::to_string(n_dist) + " numbers, got " +
+                     (d.IsSequence() ? std::to_string(d.size()) : std::string("no list")));
+      }
+      s.distortion_coeffs = in_.Vector(d, where + ".distortion_coeffs", n_dist);
+    } else if (n_dist > 0) {
+      in_.Fail(node, where,
+               "missing required key 'distortion_coeffs' (" + std::to_string(n_dist) +
+                   " numbers for " + s.distortion_model + ")");
+    }
+    const YAML::Node res = node["resolution"];
+    if (!res.IsSequence() || res.size() != 2)
+      in_.Fail(res, where, "resolution: expected [width, height]");
+    s.width = in_.Int(res[0], where + ".resolution");
+    s.height = in_.Int(res[1], where + ".resolution");
+    if (s.width <= 0 || s.height <= 0)
+      in_.Fail(res, where, "resolution: width and height must be > 0");
+    if (node["line_delay"]) {
+      s.line_delay = in_.FiniteDouble(node["line_delay"], where + ".line_delay");
+      if (s.line_delay < 0.0)
+        in_.Fail(node["line_delay"], where, "line_delay must be >= 0 (seconds per row)");
+    }
+    if (node["noise"]) {
+      in_.CheckKeys(node["noise"], where + ".noise", {"pixel_sigma"}, "the noise of a camera");
+      if (node["noise"]["pixel_sigma"]) {
+        s.pixel_sigma = in_.FiniteDouble(node["noise"]["pixel_sigma"], where + ".noise");
+        if (!(s.pixel_sigma > 0.0))
+          in_.Fail(node["noise"]["pixel_sigma"], where, "noise.pixel_sigma must be > 0 (px)");
+      }
+    }
+  }
+
+  std::vector<double> ReadSigmaValues(const YAML::Node& node, const std::string& where, int size,
+                                      bool scalar, const std::string& block) {
+    std::vector<double> v;
+    if (scalar) {
+      if (!node.IsScalar())
+        in_.Fail(node, where, "expected one number");
+      v.push_back(in_.Double(node, where));
+    } else {
+      v = in_.Vector(node, where, size, true);
+    }
+    for (double x : v) {
+      // sigma: >= 0, .inf when undetermined, .nan when the covariance failed; prior_sigma: > 0,
+      // .inf for "no prior on this component".
+      const bool ok = block == "sigma" ? (std::isnan(x) || x >= 0.0) : (x > 0.0);
+      if (!ok) {
+        in_.Fail(node, where,
+                 block == "sigma" ? "a sigma must be >= 0 (or .inf / .nan)"
+                                  : "a prior_sigma must be > 0 (or .inf for no prior)");
+      }
+    }
+    return v;
+  }
+
+  SigmaBlock ReadSigma(const YAML::Node& node, const RigConfig& rig, const SensorConfig& s,
+                       const std::string& block) {
+    const std::string where = Where(s.name) + "." + block;
+    SigmaBlock out;
+    if (node.IsNull())
+      return out;
+    const std::vector<ParameterKey> keys = SensorParameterKeys(rig, s);
+    std::set<std::string> allowed;
+    for (const ParameterKey& k : keys)
+      allowed.insert(k.key);
+    in_.CheckKeys(node, where, allowed, block + " of this sensor");
+    for (const ParameterKey& k : keys) {
+      if (node[k.key]) {
+        out.values[k.key] =
+            ReadSigmaValues(node[k.key], where + "." + k.key, k.size, k.scalar, block);
+      }
+    }
+    return out;
+  }
+
+  SolverSummary ReadSolver(const YAML::Node& node) {
+    in_.CheckKeys(node, "solver", {"method", "iterations", "final_cost", "seconds"}, "solver");
+    SolverSummary s;
+    if (node["method"])
+      s.method = in_.String(node["method"], "solver.method");
+    if (node["iterations"])
+      s.iterations = in_.Int(node["iterations"], "solver.iterations");
+    if (node["final_cost"])
+      s.final_cost = in_.Double(node["final_cost"], "solver.final_cost");
+    if (node["seconds"])
+      s.seconds = in_.Double(node["seconds"], "solver.seconds");
+    return s;
+  }
+
+  void ReadResiduals(const YAML::Node& node, RigConfig* rig) {
+    if (node.IsNull())
+      return;
+    in_.RequireMap(node, "residuals");
+    for (const auto& kv : node) {
+      const std::string name = in_.String(kv.first, "residuals");
+      const std::string where = "residuals." + name;
+      if (!rig->Find(name))
+        in_.Fail(kv.first, "residuals", "'" + name + "' names no sensor of the rig");
+      in_.CheckKeys(kv.second, where,
+                    {"count", "rms_px", "rms_gyro", "rms_accel", "rms_whitened",
+                     "rms_whitened_gyro", "rms_whitened_accel"},
+                    "the residuals of a sensor");
+      SensorResiduals r;
+      if (kv.second["count"])
+        r.count = in_.Int64(kv.second["count"], where + ".count");
+      auto opt = [&](const char* key, std::optional<double>* out) {
+        if (kv.second[key])
+          *out = in_.Double(kv.second[key], where + "." + key);
+      };
+      opt("rms_px", &r.rms_px);
+      opt("rms_gyro", &r.rms_gyro);
+      opt("rms_accel", &r.rms_accel);
+      opt("rms_whitened", &r.rms_whitened);
+      opt("rms_whitened_gyro", &r.rms_whitened_gyro);
+      opt("rms_whitened_accel", &r.rms_whitened_accel);
+      if (!rig->residuals.emplace(name, r).second)
+        in_.Fail(kv.first, "residuals", "'" + name + "' is given twice");
+    }
+  }
+
+  Observability ReadObservability(const YAML::Node& node) {
+    Observability o;
+    if (node.IsNull())
+      return o;
+    in_.CheckKeys(node, "observability",
+                  {"unobservable", "weak", "directions", "motion", "predicted_unobservable"},
+                  "observability");
+    if (node["unobservable"])
+      o.unobservable = in_.StringList(node["unobservable"], "observability.unobservable");
+    if (node["weak"])
+      o.weak = in_.StringList(node["weak"], "observability.weak");
+    if (node["predicted_unobservable"]) {
+      o.predicted_unobservable =
+          in_.StringList(node["predicted_unobservable"], "observability.predicted_unobservable");
+    }
+    if (node["directions"] && !node["directions"].IsNull()) {
+      const std::string where = "observability.directions";
+      if (!node["directions"].IsSequence())
+        in_.Fail(node["directions"], where, "expected a list");
+      for (const auto& d : node["directions"]) {
+        in_.CheckKeys(d, where, {"eigenvalue", "parameters"}, "a direction");
+        ObservabilityDirection dir;
+        if (!d["eigenvalue"])
+          in_.Fail(d, where, "missing required key 'eigenvalue'");
+        dir.eigenvalue = in_.Double(d["eigenvalue"], where + ".eigenvalue");
+        if (d["parameters"] && !d["parameters"].IsNull()) {
+          if (!d["parameters"].IsSequence())
+            in_.Fail(d["parameters"], where, "parameters: expected a list of {name, loading}");
+          for (const auto& p : d["parameters"]) {
+            in_.CheckKeys(p, where + ".parameters", {"name", "loading"}, "a loading");
+            if (!p["name"] || !p["loading"])
+              in_.Fail(p, where + ".parameters", "each entry needs name and loading");
+            dir.parameters.push_back({in_.String(p["name"], where + ".parameters.name"),
+                                      in_.Double(p["loading"], where + ".parameters.loading")});
+          }
+        }
+        o.directions.push_back(dir);
+      }
+    }
+    if (node["motion"] && !node["motion"].IsNull()) {
+      const std::string where = "observability.motion";
+      if (!node["motion"].IsSequence())
+        in_.Fail(node["motion"], where, "expected a list");
+      for (const auto& m : node["motion"]) {
+        in_.CheckKeys(m, where, {"primitive", "sensor", "axis", "t0", "t1"}, "a motion primitive");
+        if (!m["primitive"])
+          in_.Fail(m, where, "missing required key 'primitive'");
+        MotionPrimitive p;
+        p.primitive = in_.String(m["primitive"], where + ".primitive");
+        if (m["sensor"])
+          p.sensor = in_.String(m["sensor"], where + ".sensor");
+        if (m["axis"])
+          p.axis = in_.Vector3(m["axis"], where + ".axis");
+        if (m["t0"])
+          p.t0 = in_.FiniteDouble(m["t0"], where + ".t0");
+        if (m["t1"])
+          p.t1 = in_.FiniteDouble(m["t1"], where + ".t1");
+        o.motion.push_back(p);
+      }
+    }
+    return o;
+  }
+
+  YamlIn in_;
+  std::vector<std::string>* warnings_;
+  bool camera_only_ = false;
+};
+
+// --- writing -----------------------------------------------------------------------------------
+
+void EmitNumbers(YAML::Emitter& out, const std::vector<double>& v) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (double x : v)
+    out << FormatDouble(x);
+  out << YAML::EndSeq;
+}
+
+template <typename Derived>
+void EmitMatrix(YAML::Emitter& out, const Eigen::MatrixBase<Derived>& m) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    out << YAML::Flow << YAML::BeginSeq;
+    for (Eigen::Index c = 0; c < m.cols(); ++c)
+      out << FormatDouble(m(r, c));
+    out << YAML::EndSeq;
+  }
+  out << YAML::EndSeq;
+}
+
+void EmitVector3(YAML::Emitter& out, const Eigen::Vector3d& v) {
+  EmitNumbers(out, {v.x(), v.y(), v.z()});
+}
+
+void EmitSigma(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s,
+               const SigmaBlock& block) {
+  out << YAML::BeginMap;
+  for (const ParameterKey& k : SensorParameterKeys(rig, s)) {
+    const std::vector<double>* v = block.Find(k.key);
+    if (!v)
+      continue;
+    out << YAML::Key << k.key << YAML::Value;
+    if (k.scalar)
+      out << FormatDouble(v->front());
+    else
+      EmitNumbers(out, *v);
+  }
+  out << YAML::EndMap;
+}
+
+void EmitSensor(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s) {
+  const bool is_base = s.name == rig.base_imu;
+  out << YAML::Key << s.name << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "type" << YAML::Value << ToString(s.type);
+  if (s.type == SensorType::kImu) {
+    out << YAML::Key << "model" << YAML::Value << ToString(s.imu_model);
+    out << YAML::Key << "g_sensitivity" << YAML::Value << ToString(s.g_sensitivity);
+  } else if (s.type == SensorType::kGyro) {
+    out << YAML::Key << "model" << YAML::Value << ToString(s.gyro_model);
+  }
+  if (!s.D_w.empty()) {
+    out << YAML::Key << "Dw" << YAML::Value;
+    EmitNumbers(out, s.D_w);
+  }
+  if (!s.D_a.empty()) {
+    out << YAML::Key << "Da" << YAML::Value;
+    EmitNumbers(out, s.D_a);
+  }
+  if (!s.T_g.empty()) {
+    out << YAML::Key << "Tg" << YAML::Value;
+    EmitNumbers(out, s.T_g);
+  }
+  if (s.type == SensorType::kImu) {
+    const std::string rot = RotationKey(s.imu_model);
+    if (!rot.empty()) {
+      out << YAML::Key << rot << YAML::Value;
+      EmitMatrix(out, rot == "R_I_a" ? s.R_I_a : s.R_I_w);
+    }
+  }
+  if (s.type == SensorType::kCamera) {
+    out << YAML::Key << "camera_model" << YAML::Value << s.camera_model;
+    out << YAML::Key << "intrinsics" << YAML::Value;
+    EmitNumbers(out, s.intrinsics);
+    out << YAML::Key << "distortion_model" << YAML::Value << s.distortion_model;
+    out << YAML::Key << "distortion_coeffs" << YAML::Value;
+    EmitNumbers(out, s.distortion_coeffs);
+    out << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << s.width
+        << s.height << YAML::EndSeq;
+    out << YAML::Key << "line_delay" << YAML::Value << FormatDouble(s.line_delay);
+  }
+  out << YAML::Key << "noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  if (s.type == SensorType::kCamera) {
+    out << YAML::Key << "pixel_sigma" << YAML::Value << FormatDouble(s.pixel_sigma);
+  } else {
+    out << YAML::Key << "gyroscope_noise_density" << YAML::Value
+        << FormatDouble(s.noise.gyroscope_noise_density);
+    out << YAML::Key << "gyroscope_random_walk" << YAML::Value
+        << FormatDouble(s.noise.gyroscope_random_walk);
+    if (s.type == SensorType::kImu) {
+      out << YAML::Key << "accelerometer_noise_density" << YAML::Value
+          << FormatDouble(s.noise.accelerometer_noise_density);
+      out << YAML::Key << "accelerometer_random_walk" << YAML::Value
+          << FormatDouble(s.noise.accelerometer_random_walk);
+    }
+    out << YAML::Key << "update_rate" << YAML::Value << FormatDouble(s.noise.update_rate);
+  }
+  out << YAML::EndMap;
+  if (!is_base) {
+    out << YAML::Key << "T_B_S" << YAML::Value;
+    EmitMatrix(out, s.T_B_S);
+    out << YAML::Key << "time_offset" << YAML::Value << FormatDouble(s.time_offset);
+  }
+  out << YAML::Key << "estimate" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (EstimateItem e : s.estimate)
+    out << ToString(e);
+  out << YAML::EndSeq;
+  if (!s.prior_sigma.empty()) {
+    out << YAML::Key << "prior_sigma" << YAML::Value << YAML::Flow;
+    EmitSigma(out, rig, s, s.prior_sigma);
+  }
+  if (!s.sigma.empty()) {
+    out << YAML::Key << "sigma" << YAML::Value << YAML::Flow;
+    EmitSigma(out, rig, s, s.sigma);
+  }
+  if (s.rostopic) {
+    out << YAML::Key << "rostopic" << YAML::Value << YAML::DoubleQuoted << *s.rostopic;
+  }
+  out << YAML::EndMap;
+}
+
+void EmitObservability(YAML::Emitter& out, const Observability& o) {
+  out << YAML::BeginMap;
+  auto list = [&out](const char* key, const std::vector<std::string>& v) {
+    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& s : v)
+      out << s;
+    out << YAML::EndSeq;
+  };
+  list("unobservable", o.unobservable);
+  list("weak", o.weak);
+  out << YAML::Key << "directions" << YAML::Value << YAML::BeginSeq;
+  for (const ObservabilityDirection& d : o.directions) {
+    out << YAML::BeginMap << YAML::Key << "eigenvalue" << YAML::Value << FormatDouble(d.eigenvalue);
+    out << YAML::Key << "parameters" << YAML::Value << YAML::BeginSeq;
+    for (const ParameterLoading& p : d.parameters) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << p.name
+          << YAML::Key << "loading" << YAML::Value << FormatDouble(p.loading) << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "motion" << YAML::Value << YAML::BeginSeq;
+  for (const MotionPrimitive& m : o.motion) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "primitive" << YAML::Value << m.primitive
+        << YAML::Key << "sensor" << YAML::Value << YAML::DoubleQuoted << m.sensor << YAML::Key
+        << "axis" << YAML::Value;
+    EmitVector3(out, m.axis);
+    out << YAML::Key << "t0" << YAML::Value << FormatDouble(m.t0) << YAML::Key << "t1"
+        << YAML::Value << FormatDouble(m.t1) << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  list("predicted_unobservable", o.predicted_unobservable);
+  out << YAML::EndMap;
+}
+
+}  // namespace
+
+void ValidateRig(const RigConfig& rig, const std::string& context) {
+  auto fail = [&context](const std::string& where, const std::string& what) {
+    throw std::runtime_error(context + ": " + (where.empty() ? "" : where + ": ") + what);
+  };
+  const SensorConfig* base = rig.Find(rig.base_imu);
+  if (!base)
+    fail("base_imu", "names no sensor: '" + rig.base_imu + "' is not under sensors");
+  const bool camera_only = rig.IsCameraOnly();
+  if (!camera_only && base->type != SensorType::kImu) {
+    fail("base_imu", "'" + rig.base_imu + "' is a " + ToString(base->type) +
+                         "; the base must be an imu (or the reference camera of a rig without "
+                         "IMUs)");
+  }
+  if (camera_only && base->type != SensorType::kCamera) {
+    fail("base_imu", "'" + rig.base_imu +
+                         "' is a gyro; a rig without an imu is a camera calibration whose base "
+                         "is the reference camera");
+  }
+  std::set<std::string> names;
+  for (const SensorConfig& s : rig.sensors) {
+    const std::string where = Where(s.name);
+    if (!names.insert(s.name).second)
+      fail(where, "sensor name given twice");
+    if (camera_only && s.type == SensorType::kGyro)
+      fail(where, "a gyroscope needs an imu as the base (this rig has none)");
+    const bool is_base = s.name == rig.base_imu;
+    auto check_count = [&](const char* key, const std::vector<double>& v, int count) {
+      if (static_cast<int>(v.size()) != count) {
+        fail(where, std::string(key) + " has " + std::to_string(v.size()) +
+                        " numbers, the model needs " + std::to_string(count));
+      }
+    };
+    check_count("Dw", s.D_w, s.type == SensorType::kCamera ? 0 : DwCount(s));
+    check_count("Da", s.D_a, DaCount(s));
+    check_count("Tg", s.T_g, TgCount(s));
+    if (s.type == SensorType::kCamera) {
+      if (IntrinsicsCount(s.camera_model) < 0)
+        fail(where, "unknown camera_model '" + s.camera_model + "'");
+      if (DistortionCount(s.distortion_model) < 0)
+        fail(where, "unknown distortion_model '" + s.distortion_model + "'");
+      check_count("intrinsics", s.intrinsics, IntrinsicsCount(s.camera_model));
+      check_count("distortion_coeffs", s.distortion_coeffs, DistortionCount(s.distortion_model));
+      if (s.width <= 0 || s.height <= 0)
+        fail(where, "resolution must be positive");
+    }
+    const Eigen::Matrix3d R = s.T_B_S.topLeftCorner<3, 3>();
+    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0 ||
+        s.T_B_S.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) {
+      fail(where, "T_B_S is not a rigid transform");
+    }
+    if (is_base && (s.T_B_S != Eigen::Matrix4d::Identity() || s.time_offset != 0.0))
+      fail(where, "the base sensor has T_B_S = identity and time_offset = 0 by definition");
+    // The estimate vocabulary against what the sensor has.
+    if (is_base &&
+        (s.Estimates(EstimateItem::kExtrinsics) || s.Estimates(EstimateItem::kTimeOffset))) {
+      fail(where, "estimate: the base sensor has no extrinsics or time_offset to estimate");
+    }
+    if (s.Estimates(EstimateItem::kLineDelay) && s.type != SensorType::kCamera)
+      fail(where, "estimate: line_delay applies to cameras only");
+    if (camera_only && s.Estimates(EstimateItem::kTimeOffset)) {
+      fail(where,
+           "estimate: a rig without IMUs pairs frames by stamp and estimates no time_offset");
+    }
+    if (s.Estimates(EstimateItem::kIntrinsics) && s.IsInertial() && DwCount(s) == 0) {
+      fail(where, "estimate: model none has no intrinsics to estimate");
+    }
+    if (s.type == SensorType::kGyro && s.gyro_model == GyroModel::kFull &&
+        s.Estimates(EstimateItem::kIntrinsics) && s.Estimates(EstimateItem::kExtrinsics)) {
+      fail(where,
+           "estimate: a gyro with model full cannot estimate its rotation (extrinsics) together "
+           "with its intrinsics: the full Dw absorbs the rotation");
+    }
+  }
+  for (const auto& [name, r] : rig.residuals) {
+    if (!rig.Find(name))
+      fail("residuals", "'" + name + "' names no sensor of the rig");
+  }
+}
+
+RigConfig ParseRig(const YAML::Node& root, const std::string& file,
+                   std::vector<std::string>* warnings) {
+  RigReader reader(file, warnings);
+  return reader.Read(root);
+}
+
+RigConfig LoadRig(const std::string& path, std::vector<std::string>* warnings) {
+  return ParseRig(YamlIn::LoadFile(path), path, warnings);
+}
+
+RigConfig ParseRigString(const std::string& yaml, const std::string& file,
+                         std::vector<std::string>* warnings) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(file + ":" + std::to_string(e.mark.line + 1) +
+                             ": malformed YAML: " + e.msg);
+  }
+  return ParseRig(root, file, warnings);
+}
+
+std::string EmitRig(const RigConfig& rig) {
+  ValidateRig(rig, "rig to write");
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);  // the target's numbers (its emitter writes doubles itself)
+  out << YAML::BeginMap;
+  out << YAML::Key << "base_imu" << YAML::Value << rig.base_imu;
+  out << YAML::Key << "gravity_magnitude" << YAML::Value << FormatDouble(rig.gravity_magnitude);
+  out << YAML::Key << "target" << YAML::Value << YAML::Flow;
+  EmitTargetConfig(rig.target, out);
+  if (rig.gravity_W) {
+    out << YAML::Key << "gravity_W" << YAML::Value;
+    EmitVector3(out, *rig.gravity_W);
+  }
+  if (rig.sigma_gravity_W) {
+    out << YAML::Key << "sigma" << YAML::Value << YAML::BeginMap << YAML::Key << "gravity_W"
+        << YAML::Value;
+    EmitVector3(out, *rig.sigma_gravity_W);
+    out << YAML::EndMap;
+  }
+  out << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+  for (const SensorConfig& s : rig.sensors)
+    EmitSensor(out, rig, s);
+  out << YAML::EndMap;
+  if (rig.solver) {
+    const SolverSummary& s = *rig.solver;
+    out << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "method" << YAML::Value << YAML::DoubleQuoted << s.method;
+    out << YAML::Key << "iterations" << YAML::Value << s.iterations;
+    out << YAML::Key << "final_cost" << YAML::Value << FormatDouble(s.final_cost);
+    out << YAML::Key << "seconds" << YAML::Value << FormatDouble(s.seconds);
+    out << YAML::EndMap;
+  }
+  if (!rig.residuals.empty()) {
+    out << YAML::Key << "residuals" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, r] : rig.residuals) {
+      out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "count" << YAML::Value << r.count;
+      auto opt = [&out](const char* key, const std::optional<double>& v) {
+        if (v)
+          out << YAML::Key << key << YAML::Value << FormatDouble(*v);
+      };
+      opt("rms_px", r.rms_px);
+      opt("rms_gyro", r.rms_gyro);
+      opt("rms_accel", r.rms_accel);
+      opt("rms_whitened", r.rms_whitened);
+      opt("rms_whitened_gyro", r.rms_whitened_gyro);
+      opt("rms_whitened_accel", r.rms_whitened_accel);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndMap;
+  }
+  if (rig.observability) {
+    out << YAML::Key << "observability" << YAML::Value;
+    EmitObservability(out, *rig.observability);
+  }
+  out << YAML::EndMap;
+  if (!out.good())
+    throw std::runtime_error("cannot emit the rig file: " + out.GetLastError());
+  return std::string(out.c_str()) + "\n";
+}
+
+void SaveRig(const RigConfig& rig, const std::string& path) {
+  const std::string text = EmitRig(rig);
+  std::ofstream f(path);
+  if (!f)
+    throw std::runtime_error(path + ": cannot write the rig file");
+  f << text;
+  if (!f)
+    throw std::runtime_error(path + ": write failed");
+}
+
+}  // namespace ctcal
