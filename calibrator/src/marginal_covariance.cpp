@@ -1,0 +1,154 @@
+#include "ctcal/calibrator/marginal_covariance.h"
+
+#include <ceres/crs_matrix.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCore>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <unordered_set>
+
+namespace ctcal {
+namespace {
+
+using SparseRowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+using SparseColMajor = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+SparseRowMajor ToEigen(const ceres::CRSMatrix& crs) {
+  return Eigen::Map<const SparseRowMajor>(crs.num_rows, crs.num_cols,
+                                          static_cast<int>(crs.values.size()), crs.rows.data(),
+                                          crs.cols.data(), crs.values.data());
+}
+
+}  // namespace
+
+MarginalInformation ComputeMarginalInformation(
+    ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
+    const std::vector<ceres::ResidualBlockId>& residual_blocks) {
+  MarginalInformation out;
+  std::unordered_set<const double*> calib_set;
+  std::vector<double*> calib_blocks;
+  std::vector<double> units;
+  for (const CalibrationBlock& b : calib) {
+    if (!problem.HasParameterBlock(b.values) || problem.IsParameterBlockConstant(b.values)) {
+      continue;
+    }
+    const int dim = problem.ParameterBlockTangentSize(b.values);
+    if (static_cast<int>(b.names.size()) != dim || static_cast<int>(b.unit.size()) != dim) {
+      throw std::logic_error("calibration block '" + (b.names.empty() ? "?" : b.names[0]) +
+                             "': names/units do not match its tangent size " + std::to_string(dim));
+    }
+    calib_set.insert(b.values);
+    calib_blocks.push_back(b.values);
+    out.names.insert(out.names.end(), b.names.begin(), b.names.end());
+    units.insert(units.end(), b.unit.begin(), b.unit.end());
+  }
+  out.unit = Eigen::Map<const Eigen::VectorXd>(units.data(), static_cast<int>(units.size()));
+
+  // Nuisance columns first, calibration last, so the Schur complement is the bottom-right block.
+  std::vector<double*> all_blocks;
+  problem.GetParameterBlocks(&all_blocks);
+  ceres::Problem::EvaluateOptions eval;
+  for (double* block : all_blocks) {
+    if (calib_set.count(block) || problem.IsParameterBlockConstant(block))
+      continue;
+    eval.parameter_blocks.push_back(block);
+    out.nuisance_dimension += problem.ParameterBlockTangentSize(block);
+  }
+  eval.parameter_blocks.insert(eval.parameter_blocks.end(), calib_blocks.begin(),
+                               calib_blocks.end());
+  eval.residual_blocks = residual_blocks;
+
+  double cost = 0.0;
+  ceres::CRSMatrix crs;
+  if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost)) {
+    throw std::runtime_error(
+        "covariance: the problem cannot be evaluated at the solution "
+        "(non-finite residuals or Jacobians)");
+  }
+  const int n = out.nuisance_dimension;
+  const int c = static_cast<int>(units.size());
+  if (crs.num_cols != n + c)
+    throw std::logic_error("covariance: unexpected Jacobian width");
+
+  const SparseRowMajor J = ToEigen(crs);
+  const SparseColMajor H = SparseColMajor(J.transpose()) * J;
+  const Eigen::MatrixXd H_cc = Eigen::MatrixXd(H.bottomRightCorner(c, c));
+  if (n == 0) {
+    out.information = H_cc;
+    return out;
+  }
+  const SparseColMajor H_nn = H.topLeftCorner(n, n);
+  const Eigen::MatrixXd H_nc = Eigen::MatrixXd(H.topRightCorner(n, c));
+
+  // A nuisance state the data do not touch (e.g. a spline knot in a gap) makes H_nn singular;
+  // damping it by a tiny fraction of its scale marginalises such a state with a flat prior
+  // instead of failing, and the amount is reported.
+  double max_diag = 0.0;
+  for (int i = 0; i < n; ++i)
+    max_diag = std::max(max_diag, H_nn.coeff(i, i));
+  Eigen::CholmodSupernodalLLT<SparseColMajor> llt;
+  for (const double relative : {0.0, 1e-12, 1e-9, 1e-6}) {
+    SparseColMajor damped = H_nn;
+    if (relative > 0.0) {
+      SparseColMajor identity(n, n);
+      identity.setIdentity();
+      damped += (relative * std::max(max_diag, 1.0)) * identity;
+    }
+    llt.compute(damped);
+    if (llt.info() == Eigen::Success) {
+      out.nuisance_damping = relative;
+      break;
+    }
+    if (relative == 1e-6) {
+      throw std::runtime_error("covariance: the nuisance information cannot be factored");
+    }
+  }
+  const Eigen::MatrixXd X = llt.solve(H_nc);
+  out.information = H_cc - H_nc.transpose() * X;
+  out.information = 0.5 * (out.information + out.information.transpose()).eval();
+  return out;
+}
+
+CalibrationCovariance InvertInformation(const MarginalInformation& info,
+                                        const CovarianceOptions& options) {
+  const int c = static_cast<int>(info.information.rows());
+  CalibrationCovariance out;
+  out.covariance = Eigen::MatrixXd::Zero(c, c);
+  out.sigma = Eigen::VectorXd::Zero(c);
+  out.undetermined.assign(c, false);
+  if (c == 0)
+    return out;
+
+  const Eigen::VectorXd& unit = info.unit;
+  const Eigen::MatrixXd scaled = unit.asDiagonal() * info.information * unit.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+  out.scaled_eigenvalues = eig.eigenvalues();
+  out.scaled_eigenvectors = eig.eigenvectors();
+  const double largest = std::max(out.scaled_eigenvalues.maxCoeff(), 0.0);
+
+  Eigen::MatrixXd scaled_cov = Eigen::MatrixXd::Zero(c, c);
+  for (int k = 0; k < c; ++k) {
+    const double lambda = out.scaled_eigenvalues(k);
+    const Eigen::VectorXd v = out.scaled_eigenvectors.col(k);
+    if (!(lambda > options.null_relative_threshold * largest) || largest == 0.0) {
+      out.null_directions.push_back(k);
+      for (int i = 0; i < c; ++i) {
+        if (std::abs(v(i)) > options.loading_threshold)
+          out.undetermined[i] = true;
+      }
+      continue;
+    }
+    scaled_cov += (1.0 / lambda) * v * v.transpose();
+  }
+  out.covariance = unit.asDiagonal() * scaled_cov * unit.asDiagonal();
+  for (int i = 0; i < c; ++i) {
+    out.sigma(i) = out.undetermined[i] ? std::numeric_limits<double>::infinity()
+                                       : std::sqrt(std::max(out.covariance(i, i), 0.0));
+  }
+  return out;
+}
+
+}  // namespace ctcal
