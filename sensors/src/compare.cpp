@@ -1,0 +1,205 @@
+#include "ctcal/sensors/compare.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "ctcal/sensors/number_format.h"
+#include "ctcal/sensors/parameter_names.h"
+#include "ctcal/spline/so3.h"
+
+namespace ctcal {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+std::string JsonNumber(double x) {
+  return std::isfinite(x) ? FormatDouble(x) : "null";
+}
+std::string JsonNumber(const std::optional<double>& x) {
+  return x ? JsonNumber(*x) : std::string("null");
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string Cell(double x) {
+  if (std::isinf(x))
+    return x > 0 ? "inf" : "-inf";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.9g", x);
+  return buf;
+}
+
+}  // namespace
+
+Comparison CompareRigs(const RigConfig& truth, const RigConfig& result) {
+  Comparison c;
+  const bool compare_gravity = truth.gravity_W.has_value() && result.gravity_W.has_value();
+  Eigen::Vector3d dtheta = Eigen::Vector3d::Zero();
+  for (const ScalarParameter& p : ScalarParameters(result, true)) {
+    if (p.sensor.empty() && !compare_gravity)
+      continue;
+    if (!p.sensor.empty()) {
+      const SensorConfig* t = truth.Find(p.sensor);
+      if (!t)
+        throw std::runtime_error("the truth has no sensor '" + p.sensor + "' (needed for " +
+                                 p.name + ")");
+      if (t->type != result.Find(p.sensor)->type) {
+        throw std::runtime_error("sensor '" + p.sensor + "' is a " +
+                                 ToString(result.Find(p.sensor)->type) + " in the result but a " +
+                                 ToString(t->type) + " in the truth");
+      }
+    }
+    ComparisonRow row;
+    row.name = p.name;
+    row.rotation = p.rotation;
+    if (p.rotation) {
+      if (p.index == 0) {
+        Eigen::Matrix3d R_true;
+        try {
+          R_true = ParameterRotation(truth, p);
+        } catch (const std::invalid_argument&) {
+          throw std::runtime_error("the truth has no rotation " + p.sensor + "." + p.key +
+                                   " (its model differs from the result's)");
+        }
+        const Eigen::Matrix3d R_est = ParameterRotation(result, p);
+        // Identical matrices give exactly 0, whatever the rounding of the quaternion product.
+        dtheta.setZero();
+        if (R_est != R_true) {
+          dtheta = RotationError<double>(Eigen::Quaterniond(R_est).normalized(),
+                                         Eigen::Quaterniond(R_true).normalized());
+        }
+        c.rotations.push_back({p.sensor + "." + p.key, dtheta.norm() * kRadToDeg});
+      }
+      row.truth = 0.0;
+      row.estimate = dtheta(p.index);
+      row.error = dtheta(p.index);
+    } else {
+      // The result's own parameter list decides the rows; the truth must have each of them.
+      const std::optional<ScalarParameter> in_truth = FindParameter(truth, p.name);
+      if (!in_truth) {
+        throw std::runtime_error("the truth has no parameter " + p.name +
+                                 " (its model differs from the result's)");
+      }
+      row.truth = ParameterValue(truth, *in_truth);
+      row.estimate = ParameterValue(result, p);
+      row.error = row.estimate - row.truth;
+    }
+    row.sigma = ParameterSigma(result, p);
+    if (row.sigma && std::isfinite(*row.sigma) && *row.sigma > 0.0)
+      row.error_over_sigma = row.error / *row.sigma;
+    c.rows.push_back(row);
+  }
+
+  ComparisonSummary& s = c.summary;
+  s.count = static_cast<int>(c.rows.size());
+  for (const ComparisonRow& row : c.rows) {
+    if (!row.error_over_sigma) {
+      ++s.undetermined;
+      continue;
+    }
+    ++s.with_sigma;
+    const double z = std::abs(*row.error_over_sigma);
+    if (z <= 3.0)
+      ++s.within_3_sigma;
+    if (!s.worst_error_over_sigma || z > std::abs(*s.worst_error_over_sigma)) {
+      s.worst_error_over_sigma = *row.error_over_sigma;
+      s.worst_name = row.name;
+    }
+  }
+  if (s.with_sigma > 0)
+    s.fraction_within_3_sigma = static_cast<double>(s.within_3_sigma) / s.with_sigma;
+  return c;
+}
+
+std::string FormatComparison(const Comparison& c) {
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof(line), "%-28s %17s %17s %17s %13s %12s\n", "parameter", "truth",
+                "estimate", "error", "sigma", "error/sigma");
+  out << line;
+  for (const ComparisonRow& r : c.rows) {
+    std::string sigma = "-";
+    std::string z = "-";
+    if (r.sigma) {
+      sigma = std::isinf(*r.sigma) ? "undetermined" : Cell(*r.sigma);
+      if (r.error_over_sigma) {
+        char buf[32];
+        std::snprintf(buf, sizeof(buf), "%.3f", *r.error_over_sigma);
+        z = buf;
+      } else if (std::isinf(*r.sigma)) {
+        z = "undetermined";
+      }
+    }
+    std::snprintf(line, sizeof(line), "%-28s %17s %17s %17s %13s %12s\n", r.name.c_str(),
+                  Cell(r.truth).c_str(), Cell(r.estimate).c_str(), Cell(r.error).c_str(),
+                  sigma.c_str(), z.c_str());
+    out << line;
+  }
+  for (const RotationComparison& r : c.rotations) {
+    std::snprintf(line, sizeof(line), "%-28s angle of Log(R_est * R_true^T): %.6g deg\n",
+                  r.name.c_str(), r.angle_deg);
+    out << line;
+  }
+  const ComparisonSummary& s = c.summary;
+  out << "summary: " << s.count << " estimated scalars, " << s.with_sigma << " with a sigma, "
+      << s.undetermined << " undetermined";
+  if (s.fraction_within_3_sigma) {
+    std::snprintf(line, sizeof(line), "; %d (%.1f%%) within 3 sigma; worst %s at %.3f sigma",
+                  s.within_3_sigma, 100.0 * *s.fraction_within_3_sigma, s.worst_name->c_str(),
+                  *s.worst_error_over_sigma);
+    out << line;
+  }
+  out << "\n";
+  return out.str();
+}
+
+std::string ComparisonJson(const Comparison& c) {
+  std::ostringstream out;
+  out << "{\n  \"parameters\": [";
+  for (std::size_t i = 0; i < c.rows.size(); ++i) {
+    const ComparisonRow& r = c.rows[i];
+    out << (i ? ",\n" : "\n") << "    {\"name\": " << JsonString(r.name)
+        << ", \"truth\": " << JsonNumber(r.truth) << ", \"estimate\": " << JsonNumber(r.estimate)
+        << ", \"error\": " << JsonNumber(r.error) << ", \"sigma\": " << JsonNumber(r.sigma)
+        << ", \"error_over_sigma\": " << JsonNumber(r.error_over_sigma)
+        << ", \"undetermined\": " << (r.error_over_sigma ? "false" : "true") << "}";
+  }
+  out << (c.rows.empty() ? "],\n" : "\n  ],\n") << "  \"rotations\": [";
+  for (std::size_t i = 0; i < c.rotations.size(); ++i) {
+    out << (i ? ", " : "") << "{\"name\": " << JsonString(c.rotations[i].name)
+        << ", \"angle_deg\": " << JsonNumber(c.rotations[i].angle_deg) << "}";
+  }
+  const ComparisonSummary& s = c.summary;
+  out << "],\n  \"summary\": {\"count\": " << s.count << ", \"with_sigma\": " << s.with_sigma
+      << ", \"undetermined\": " << s.undetermined << ", \"within_3_sigma\": " << s.within_3_sigma
+      << ", \"fraction_within_3_sigma\": " << JsonNumber(s.fraction_within_3_sigma)
+      << ", \"worst\": ";
+  if (s.worst_name) {
+    out << "{\"name\": " << JsonString(*s.worst_name)
+        << ", \"error_over_sigma\": " << JsonNumber(s.worst_error_over_sigma) << "}";
+  } else {
+    out << "null";
+  }
+  out << "}\n}\n";
+  return out.str();
+}
+
+}  // namespace ctcal
