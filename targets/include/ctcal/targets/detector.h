@@ -1,0 +1,129 @@
+// Board corner detection in one image or in many (parallel over images, deterministic output).
+//
+// Pixel convention (SPEC section 4): pixel (0, 0) is the centre of the top-left pixel, as in
+// OpenCV. libapriltag puts the centre of the top-left pixel at (0.5, 0.5); its corners are shifted
+// by -0.5 px on the way out.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ctcal/targets/board.h"
+
+namespace ctcal {
+
+struct CornerObservation {
+  int id = -1;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // px, SPEC section 4
+  double sigma = 0.0;                            // px, per coordinate
+};
+
+// Kalibr's rules plus the refinement's own checks; defaults follow Kalibr where it has one.
+struct DetectorOptions {
+  // A tag with a corner closer than this to the image border is dropped (Kalibr: 4 px).
+  double min_border_distance_px = 4.0;
+  // A view with fewer accepted tags is no observation (Kalibr: minTagsForValidObs = 4).
+  int min_tags = 4;
+  // A corner the sub-pixel refinement moves farther than this is dropped with its whole tag
+  // (Kalibr: maxSubpixDisplacement2 = 1.5 px^2, i.e. 1.22 px).
+  double max_refinement_jump_px = 1.22;
+  // Sub-pixel refinement on/off, and the floor of the reported sigma (px): a noise-free image
+  // gives a near-zero residual, which would claim more than the model of the corner can deliver.
+  bool refine = true;
+  double min_sigma_px = 0.03;
+  // Reported when no refinement ran (px).
+  double default_sigma_px = 0.5;
+  // libapriltag's quad decimation (1 = full resolution; 2 is faster on large images).
+  float quad_decimate = 1.0f;
+  // Worker threads for DetectMany (0 = hardware concurrency).
+  int threads = 0;
+};
+
+enum class RejectReason {
+  kNearBorder,      // a tag corner within min_border_distance_px of the image border
+  kDuplicateId,     // the same tag id decoded twice (both dropped: which one is the board's?)
+  kUnknownId,       // a tag id the board does not have (another board in view, wrong file?)
+  kRefinementJump,  // sub-pixel refinement moved a corner too far / did not converge
+  kTooFewTags,      // the whole view: fewer than min_tags tags left
+};
+const char* ToString(RejectReason reason);
+
+struct TagRejection {
+  int tag_id = -1;
+  RejectReason reason = RejectReason::kNearBorder;
+};
+
+struct DetectionResult {
+  bool board_found = false;                // a valid observation of the board (corners non-empty)
+  std::vector<CornerObservation> corners;  // sorted by id
+  int tags_detected = 0;                   // tags decoded before the rules (AprilGrid)
+  int tags_accepted = 0;
+  std::vector<TagRejection> rejected;
+  std::string error;  // set when the image could not be used at all (unreadable, empty)
+};
+
+class Detector {
+ public:
+  explicit Detector(const Board& board, const DetectorOptions& options = {});
+  ~Detector();
+  Detector(const Detector&) = delete;
+  Detector& operator=(const Detector&) = delete;
+
+  const Board& board() const { return board_; }
+  const DetectorOptions& options() const { return options_; }
+
+  // Any of CV_8U / CV_16U with 1, 3 or 4 channels (colour is BGR/BGRA as cv::imread gives it).
+  // Thread-safe: concurrent calls use separate libapriltag detectors.
+  DetectionResult Detect(const cv::Mat& image) const;
+  // Reads every file (cv::IMREAD_UNCHANGED) and detects, `options().threads` images at a time;
+  // result i belongs to paths[i] whatever the thread schedule. `progress(done, total)` is called
+  // from one thread at a time.
+  std::vector<DetectionResult> DetectFiles(
+      const std::vector<std::string>& paths,
+      const std::function<void(size_t, size_t)>& progress = nullptr) const;
+
+ private:
+  struct TagContext;
+  std::unique_ptr<TagContext> AcquireTagContext() const;
+  void ReleaseTagContext(std::unique_ptr<TagContext> context) const;
+  DetectionResult DetectAprilGrid(const cv::Mat& gray) const;
+  DetectionResult DetectCheckerboard(const cv::Mat& gray) const;
+
+  Board board_;
+  DetectorOptions options_;
+  struct Pool;
+  std::unique_ptr<Pool> pool_;
+};
+
+// One 8-bit grey image from any supported input: 16-bit images are stretched from their own
+// minimum to maximum (cameras store 10- or 12-bit data in 16-bit containers), colour is averaged
+// to grey. Throws std::invalid_argument for other depths or channel counts.
+cv::Mat ToGray8(const cv::Mat& image);
+
+// A raw libapriltag tag36h11 detection with corners in SPEC section 4 pixels, in the tag's own
+// order bottom-left, bottom-right, top-right, top-left (as seen printed upright).
+struct TagDetection {
+  int id = -1;
+  int hamming = 0;
+  double decision_margin = 0.0;
+  std::array<Eigen::Vector2d, 4> corners;
+};
+// Every tag36h11 tag with a `black_border`-bit border (1 = AprilTag 3's standard tags, 2 =
+// Kalibr's), unrefined and unfiltered, sorted by id.
+std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border,
+                                          float quad_decimate = 1.0f);
+
+// Refines an X-junction or a corner near `uv` by the gradient-orthogonality condition (every
+// image gradient in a window is orthogonal to the vector from the corner to its pixel), weighted
+// by a Gaussian. Returns false if it does not converge. `sigma_px` (optional) is the estimate's
+// standard deviation from the fit's residuals: s^2 * (sum g g^T)^-1, s^2 the residual variance.
+bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv,
+                  double* sigma_px = nullptr);
+
+}  // namespace ctcal

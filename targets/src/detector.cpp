@@ -1,0 +1,590 @@
+#include "ctcal/targets/detector.h"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "tag_family.h"
+
+namespace ctcal {
+
+const char* ToString(RejectReason reason) {
+  switch (reason) {
+    case RejectReason::kNearBorder:
+      return "near the image border";
+    case RejectReason::kDuplicateId:
+      return "duplicate id";
+    case RejectReason::kUnknownId:
+      return "id not on this board";
+    case RejectReason::kRefinementJump:
+      return "sub-pixel refinement jumped";
+    case RejectReason::kTooFewTags:
+      return "too few tags in the view";
+  }
+  return "?";
+}
+
+cv::Mat ToGray8(const cv::Mat& image) {
+  if (image.empty())
+    throw std::invalid_argument("empty image");
+  cv::Mat gray;
+  switch (image.channels()) {
+    case 1:
+      gray = image;
+      break;
+    case 3:
+      cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+      break;
+    case 4:
+      cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+      break;
+    default:
+      throw std::invalid_argument("unsupported image with " + std::to_string(image.channels()) +
+                                  " channels");
+  }
+  if (gray.depth() == CV_8U)
+    return gray;
+  if (gray.depth() != CV_16U)
+    throw std::invalid_argument("unsupported image depth (expected 8- or 16-bit)");
+  double lo = 0.0, hi = 0.0;
+  cv::minMaxLoc(gray, &lo, &hi);
+  cv::Mat out;
+  const double scale = hi > lo ? 255.0 / (hi - lo) : 1.0;
+  gray.convertTo(out, CV_8U, scale, -lo * scale);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sub-pixel refinement.
+//
+// For a corner q and any pixel p near it, the image gradient g(p) is either ~0 (flat region) or
+// orthogonal to p - q (p on an edge through q): g(p)^T (p - q) = 0. Stacking the window's pixels
+// with Gaussian weights w gives the normal equations
+//   G q = sum_i w_i g_i g_i^T p_i,   G = sum_i w_i g_i g_i^T,
+// solved repeatedly with the window re-centred on q (the gradients are re-sampled by bilinear
+// interpolation at the new sub-pixel positions). The residuals r_i = g_i^T (p_i - q) measure how
+// well the corner model fits; their sandwich estimate
+//   Cov(q) = G^-1 (sum_i w_i^2 r_i^2 g_i g_i^T) G^-1
+// is the reported uncertainty (no assumption of equal noise across the window).
+bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px) {
+  CV_Assert(gray.type() == CV_8UC1);
+  const int h = std::max(1, half_window);
+  const int n = 2 * h + 3;  // patch with a one-pixel rim for central differences
+  const double weight_sigma = 0.5 * (h + 1);
+  std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
+  for (int dy = -h; dy <= h; ++dy) {
+    for (int dx = -h; dx <= h; ++dx) {
+      weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)] =
+          std::exp(-(dx * dx + dy * dy) / (2.0 * weight_sigma * weight_sigma));
+    }
+  }
+  const Eigen::Vector2d start = *uv;
+  Eigen::Vector2d q = start;
+  cv::Mat patch;
+  Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
+  Eigen::Matrix2d G_inv = Eigen::Matrix2d::Zero();
+  bool converged = false;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    if (q.x() < h + 2 || q.y() < h + 2 || q.x() > gray.cols - h - 3 || q.y() > gray.rows - h - 3)
+      return false;
+    // getRectSubPix samples the patch centred on q (pixel centres at integer coordinates).
+    cv::getRectSubPix(gray, cv::Size(n, n),
+                      cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())), patch,
+                      CV_32F);
+    G.setZero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for (int dy = -h; dy <= h; ++dy) {
+      const float* row = patch.ptr<float>(dy + h + 1);
+      const float* up = patch.ptr<float>(dy + h);
+      const float* down = patch.ptr<float>(dy + h + 2);
+      for (int dx = -h; dx <= h; ++dx) {
+        const int c = dx + h + 1;
+        const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
+        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
+        const Eigen::Matrix2d wgg = w * g * g.transpose();
+        G += wgg;
+        b += wgg * Eigen::Vector2d(dx, dy);  // p_i - q_current
+      }
+    }
+    const double det = G.determinant();
+    if (!(det > 1e-9 * G.trace() * G.trace()) || G.trace() <= 0.0)
+      return false;
+    G_inv = G.inverse();
+    const Eigen::Vector2d step = G_inv * b;
+    q += step;
+    if ((q - start).norm() > h + 1.0)
+      return false;
+    if (step.squaredNorm() < 1e-8) {
+      converged = true;
+      break;
+    }
+  }
+  if (!converged)
+    return false;
+  if (sigma_px != nullptr) {
+    cv::getRectSubPix(gray, cv::Size(n, n),
+                      cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())), patch,
+                      CV_32F);
+    Eigen::Matrix2d meat = Eigen::Matrix2d::Zero();
+    for (int dy = -h; dy <= h; ++dy) {
+      const float* row = patch.ptr<float>(dy + h + 1);
+      const float* up = patch.ptr<float>(dy + h);
+      const float* down = patch.ptr<float>(dy + h + 2);
+      for (int dx = -h; dx <= h; ++dx) {
+        const int c = dx + h + 1;
+        const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
+        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
+        const double r = g.dot(Eigen::Vector2d(dx, dy));
+        meat += (w * w * r * r) * g * g.transpose();
+      }
+    }
+    const Eigen::Matrix2d cov = G_inv * meat * G_inv;
+    *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
+  }
+  *uv = q;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// libapriltag detectors: not thread-safe, so a small pool hands one to each concurrent call.
+
+struct Detector::TagContext {
+  internal::TagFamilyPtr family;
+  apriltag_detector_t* detector = nullptr;
+  ~TagContext() {
+    if (detector != nullptr)
+      apriltag_detector_destroy(detector);  // before the family: it frees the decode table
+  }
+};
+
+struct Detector::Pool {
+  std::mutex mutex;
+  std::vector<std::unique_ptr<TagContext>> free;
+};
+
+namespace {
+
+apriltag_detector_t* NewApriltagDetector(apriltag_family_t* family, float quad_decimate) {
+  apriltag_detector_t* detector = apriltag_detector_create();
+  // Up to 2 corrected bits: tag36h11's minimum distance of 11 keeps false positives negligible.
+  apriltag_detector_add_family_bits(detector, family, 2);
+  detector->nthreads = 1;  // parallel over images instead
+  detector->quad_decimate = quad_decimate;
+  detector->quad_sigma = 0.0f;
+  detector->refine_edges = true;
+  detector->decode_sharpening = 0.25;
+  return detector;
+}
+
+std::vector<TagDetection> RunApriltag(apriltag_detector_t* detector, const cv::Mat& gray) {
+  image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
+                   const_cast<uint8_t*>(gray.ptr<uint8_t>())};
+  zarray_t* detections = apriltag_detector_detect(detector, &image);
+  std::vector<TagDetection> out;
+  out.reserve(static_cast<size_t>(zarray_size(detections)));
+  for (int i = 0; i < zarray_size(detections); ++i) {
+    apriltag_detection_t* det = nullptr;
+    zarray_get(detections, i, &det);
+    TagDetection tag;
+    tag.id = det->id;
+    tag.hamming = det->hamming;
+    tag.decision_margin = det->decision_margin;
+    // libapriltag's p[0..3] are the tag-frame points (-1,1), (1,1), (1,-1), (-1,-1) with the tag
+    // frame's y pointing down the printed tag: bottom-left, bottom-right, top-right, top-left,
+    // Kalibr's order. Its pixel (0,0) is the top-left pixel's corner: shift to its centre.
+    for (int k = 0; k < 4; ++k)
+      tag.corners[static_cast<size_t>(k)] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    out.push_back(tag);
+  }
+  apriltag_detections_destroy(detections);
+  std::stable_sort(out.begin(), out.end(),
+                   [](const TagDetection& a, const TagDetection& b) { return a.id < b.id; });
+  return out;
+}
+
+// The maximum filter over the pixels {0, 1}^2 up-left of each pixel erodes black by that set: an
+// edge with outward unit normal n (image axes) moves inwards by d = -min(0, n_x, n_y, n_x + n_y).
+// Moving both edges at a corner back out by their d solves n_1^T dc = d_1, n_2^T dc = d_2.
+void UndoThinning(TagDetection* tag) {
+  const std::array<Eigen::Vector2d, 4> c = tag->corners;
+  double area = 0.0;
+  for (size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d& a = c[k];
+    const Eigen::Vector2d& b = c[(k + 1) % 4];
+    area += a.x() * b.y() - a.y() * b.x();
+  }
+  // Outward normal of the edge k -> k+1 for either winding.
+  auto normal = [&](size_t k) {
+    const Eigen::Vector2d e = (c[(k + 1) % 4] - c[k]).normalized();
+    const Eigen::Vector2d n(e.y(), -e.x());
+    return area > 0.0 ? n : Eigen::Vector2d(-n);
+  };
+  auto shift = [](const Eigen::Vector2d& n) {
+    return -std::min({0.0, n.x(), n.y(), n.x() + n.y()});
+  };
+  for (size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d n1 = normal((k + 3) % 4);  // edge into corner k
+    const Eigen::Vector2d n2 = normal(k);            // edge out of corner k
+    Eigen::Matrix2d A;
+    A << n1.transpose(), n2.transpose();
+    if (std::abs(A.determinant()) < 1e-3)
+      continue;
+    tag->corners[k] = c[k] + A.inverse() * Eigen::Vector2d(shift(n1), shift(n2));
+  }
+}
+
+// Kalibr's black squares touch every tag at its four corners. Blurred and thresholded, the touch
+// points become black bridges: the tag's black square merges with its neighbours into one
+// component and libapriltag's quad search (black/white boundary clusters) finds no quad. Each
+// detected tag predicts its four corner squares through its homography (tag plane -> image);
+// painting them white frees the neighbours, which the next pass finds, and so on. libapriltag
+// fits its corners to whole edges, so the small bite this takes out of a tag's corner does not
+// move them; the sub-pixel refinement runs on the untouched image anyway.
+std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv::Mat& gray,
+                                         const Board& board) {
+  // Tags by id; a run that decodes an id twice keeps both (the duplicate rule needs them).
+  // `confirmed` come from the image itself or its painted copy, `seeds` from the thinned copy.
+  std::map<int, std::vector<TagDetection>> confirmed;
+  std::map<int, std::vector<TagDetection>> seeds;
+  auto merge = [](const std::vector<TagDetection>& tags,
+                  std::map<int, std::vector<TagDetection>>* into) {
+    std::map<int, std::vector<TagDetection>> run;
+    for (const TagDetection& tag : tags)
+      run[tag.id].push_back(tag);
+    bool added = false;
+    for (auto& [id, list] : run) {
+      added |= into->count(id) == 0;
+      (*into)[id] = std::move(list);
+    }
+    return added;
+  };
+  auto board_ids = [&board](const std::map<int, std::vector<TagDetection>>& tags) {
+    int n = 0;
+    for (const auto& entry : tags)
+      n += entry.first < board.NumTags() ? 1 : 0;
+    return n;
+  };
+  merge(RunApriltag(detector, gray), &confirmed);
+  if (board_ids(confirmed) < board.NumTags()) {
+    // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
+    // pixel on its top and left. Their corners are biased by up to a pixel: they only seed the
+    // painting, and are used as detections only if the painted image never gives the tag.
+    cv::Mat thinned;
+    cv::dilate(gray, thinned, cv::Mat::ones(2, 2, CV_8U));
+    std::vector<TagDetection> thinned_tags = RunApriltag(detector, thinned);
+    for (TagDetection& tag : thinned_tags)
+      UndoThinning(&tag);
+    merge(thinned_tags, &seeds);
+  }
+  const double size = board.config().tag_size;
+  const double gap = board.config().tag_spacing * size;
+  const double grow = 0.15 * gap;
+  const std::vector<cv::Point2f> tag_square = {{0.0f, 0.0f},
+                                               {static_cast<float>(size), 0.0f},
+                                               {static_cast<float>(size), static_cast<float>(size)},
+                                               {0.0f, static_cast<float>(size)}};
+  cv::Mat work;
+  std::set<int> painted;
+  for (int pass = 0; pass < 4 && board_ids(confirmed) < board.NumTags(); ++pass) {
+    if (work.empty())
+      work = gray.clone();
+    bool painted_new = false;
+    for (const auto* tags : {&confirmed, &seeds}) {
+      for (const auto& [id, list] : *tags) {
+        if (id >= board.NumTags() || list.size() != 1 || !painted.insert(id).second)
+          continue;
+        painted_new = true;
+        const TagDetection& tag = list.front();
+        std::vector<cv::Point2f> image_corners;
+        for (const Eigen::Vector2d& c : tag.corners)
+          image_corners.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+        const cv::Mat H = cv::getPerspectiveTransform(tag_square, image_corners);
+        // White level: the gaps beside the tag's four edges.
+        std::vector<cv::Point2f> gap_centres = {
+            {static_cast<float>(0.5 * size), static_cast<float>(-0.5 * gap)},
+            {static_cast<float>(size + 0.5 * gap), static_cast<float>(0.5 * size)},
+            {static_cast<float>(0.5 * size), static_cast<float>(size + 0.5 * gap)},
+            {static_cast<float>(-0.5 * gap), static_cast<float>(0.5 * size)}};
+        cv::perspectiveTransform(gap_centres, gap_centres, H);
+        int white = 0;
+        for (const cv::Point2f& p : gap_centres) {
+          const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
+          const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
+          white = std::max(white, static_cast<int>(gray.at<uint8_t>(y, x)));
+        }
+        for (const cv::Point2f& corner : tag_square) {
+          const float x0 = corner.x > 0.0f ? corner.x - static_cast<float>(grow)
+                                           : corner.x - static_cast<float>(gap + grow);
+          const float y0 = corner.y > 0.0f ? corner.y - static_cast<float>(grow)
+                                           : corner.y - static_cast<float>(gap + grow);
+          const float w = static_cast<float>(gap + 2.0 * grow);
+          std::vector<cv::Point2f> square = {
+              {x0, y0}, {x0 + w, y0}, {x0 + w, y0 + w}, {x0, y0 + w}};
+          cv::perspectiveTransform(square, square, H);
+          std::vector<cv::Point> polygon;
+          for (const cv::Point2f& p : square)
+            polygon.emplace_back(static_cast<int>(std::lround(p.x)),
+                                 static_cast<int>(std::lround(p.y)));
+          cv::fillConvexPoly(work, polygon, cv::Scalar(white));
+        }
+      }
+    }
+    if (!painted_new || !merge(RunApriltag(detector, work), &confirmed))
+      break;
+  }
+  for (auto& entry : seeds)
+    confirmed.insert(entry);  // only where no confirmed detection exists
+  std::vector<TagDetection> tags;
+  for (auto& entry : confirmed)
+    tags.insert(tags.end(), entry.second.begin(), entry.second.end());
+  return tags;
+}
+
+}  // namespace
+
+std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border,
+                                          float quad_decimate) {
+  if (black_border != 1 && black_border != 2)
+    throw std::invalid_argument("black_border must be 1 or 2");
+  const cv::Mat gray = ToGray8(image);
+  internal::TagFamilyPtr family = internal::CreateTag36h11(black_border);
+  apriltag_detector_t* detector = NewApriltagDetector(family.get(), quad_decimate);
+  std::vector<TagDetection> tags = RunApriltag(detector, gray);
+  apriltag_detector_destroy(detector);
+  return tags;
+}
+
+Detector::Detector(const Board& board, const DetectorOptions& options)
+    : board_(board), options_(options), pool_(std::make_unique<Pool>()) {}
+
+Detector::~Detector() = default;
+
+std::unique_ptr<Detector::TagContext> Detector::AcquireTagContext() const {
+  {
+    std::lock_guard<std::mutex> lock(pool_->mutex);
+    if (!pool_->free.empty()) {
+      std::unique_ptr<TagContext> context = std::move(pool_->free.back());
+      pool_->free.pop_back();
+      return context;
+    }
+  }
+  auto context = std::make_unique<TagContext>();
+  context->family = internal::CreateTag36h11(board_.config().black_tag_border);
+  context->detector = NewApriltagDetector(context->family.get(), options_.quad_decimate);
+  return context;
+}
+
+void Detector::ReleaseTagContext(std::unique_ptr<TagContext> context) const {
+  std::lock_guard<std::mutex> lock(pool_->mutex);
+  pool_->free.push_back(std::move(context));
+}
+
+DetectionResult Detector::Detect(const cv::Mat& image) const {
+  DetectionResult result;
+  cv::Mat gray;
+  try {
+    gray = ToGray8(image);
+  } catch (const std::exception& e) {
+    result.error = e.what();
+    return result;
+  }
+  if (!gray.isContinuous())
+    gray = gray.clone();
+  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray) : DetectCheckerboard(gray);
+}
+
+DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
+  DetectionResult result;
+  std::unique_ptr<TagContext> context = AcquireTagContext();
+  const std::vector<TagDetection> tags = DetectGridTags(context->detector, gray, board_);
+  ReleaseTagContext(std::move(context));
+  result.tags_detected = static_cast<int>(tags.size());
+
+  std::map<int, int> id_count;
+  for (const TagDetection& tag : tags)
+    ++id_count[tag.id];
+  const double margin = options_.min_border_distance_px;
+  const int cells = Board::kTagDataBits + 2 * board_.config().black_tag_border;
+  for (const TagDetection& tag : tags) {
+    if (tag.id >= board_.NumTags()) {
+      result.rejected.push_back({tag.id, RejectReason::kUnknownId});
+      continue;
+    }
+    if (id_count[tag.id] > 1) {
+      result.rejected.push_back({tag.id, RejectReason::kDuplicateId});
+      continue;
+    }
+    bool near_border = false;
+    for (const Eigen::Vector2d& c : tag.corners) {
+      near_border |= c.x() < margin || c.y() < margin || c.x() > gray.cols - 1 - margin ||
+                     c.y() > gray.rows - 1 - margin;
+    }
+    if (near_border) {
+      result.rejected.push_back({tag.id, RejectReason::kNearBorder});
+      continue;
+    }
+    // The clean neighbourhood of a tag corner is the black border's width (and the corner
+    // square); the window stays inside it, and at least Kalibr's 5 x 5.
+    double edge = 0.0;
+    for (int k = 0; k < 4; ++k)
+      edge += (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
+                  .norm();
+    const double bit_px = edge / 4.0 / cells;
+    const int half_window =
+        std::clamp(static_cast<int>(0.8 * board_.config().black_tag_border * bit_px), 2, 12);
+    // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
+    // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
+    // is two bits away, so a jump up to 0.4 bit still lands on the right one.
+    const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
+    const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
+    std::array<CornerObservation, 4> refined;
+    bool ok = true;
+    for (size_t k = 0; k < 4; ++k) {
+      refined[k].id = ids[k];
+      refined[k].uv = tag.corners[k];
+      refined[k].sigma = options_.default_sigma_px;
+      if (!options_.refine)
+        continue;
+      double sigma = 0.0;
+      if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma) ||
+          (refined[k].uv - tag.corners[k]).norm() > max_jump) {
+        ok = false;
+        break;
+      }
+      refined[k].sigma = std::max(options_.min_sigma_px, sigma);
+    }
+    if (!ok) {
+      result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
+      continue;
+    }
+    ++result.tags_accepted;
+    result.corners.insert(result.corners.end(), refined.begin(), refined.end());
+  }
+  if (result.tags_accepted < options_.min_tags) {
+    if (result.tags_accepted > 0)
+      result.rejected.push_back({-1, RejectReason::kTooFewTags});
+    result.corners.clear();
+  }
+  std::sort(result.corners.begin(), result.corners.end(),
+            [](const CornerObservation& a, const CornerObservation& b) { return a.id < b.id; });
+  result.board_found = !result.corners.empty();
+  return result;
+}
+
+DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
+  DetectionResult result;
+  const int rows = board_.rows();
+  const int cols = board_.cols();
+  std::vector<cv::Point2f> found;
+  // OpenCV's pattern size is (points per row, points per column) and it returns the points row
+  // by row: index r * cols + c, the board's id.
+  if (!cv::findChessboardCornersSB(gray, cv::Size(cols, rows), found, cv::CALIB_CB_NORMALIZE_IMAGE))
+    return result;
+  if (static_cast<int>(found.size()) != rows * cols)
+    return result;
+  // A board with an odd number of squares along one side looks the same after a half turn, so
+  // OpenCV may return it from either end. The square before corner 0 is black (Board); the one
+  // after the last corner is black only if rows + cols is even. When they differ, sample both.
+  if ((rows + cols) % 2 == 1) {
+    std::vector<cv::Point2f> board_xy;
+    for (int id = 0; id < rows * cols; ++id) {
+      const Eigen::Vector3d& p = board_.Corner(id);
+      board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+    }
+    const cv::Mat H = cv::findHomography(board_xy, found);
+    if (!H.empty()) {
+      const double rs = board_.config().row_spacing_m;
+      const double cs = board_.config().col_spacing_m;
+      std::vector<cv::Point2f> centres = {
+          {static_cast<float>(-0.5 * rs), static_cast<float>(-0.5 * cs)},
+          {static_cast<float>((rows - 0.5) * rs), static_cast<float>((cols - 0.5) * cs)}};
+      std::vector<cv::Point2f> pixels;
+      cv::perspectiveTransform(centres, pixels, H);
+      auto intensity = [&](const cv::Point2f& p) {
+        const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
+        const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
+        return static_cast<int>(gray.at<uint8_t>(y, x));
+      };
+      if (intensity(pixels[0]) > intensity(pixels[1]))
+        std::reverse(found.begin(), found.end());
+    }
+  }
+  // Window: 40 % of the smallest distance between neighbouring corners.
+  double min_step = 1e9;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c + 1 < cols; ++c) {
+      const cv::Point2f d = found[r * cols + c + 1] - found[r * cols + c];
+      min_step = std::min(min_step, static_cast<double>(std::hypot(d.x, d.y)));
+    }
+  }
+  const int half_window = std::clamp(static_cast<int>(0.4 * min_step), 2, 12);
+  for (int id = 0; id < rows * cols; ++id) {
+    CornerObservation corner;
+    corner.id = id;
+    corner.uv = Eigen::Vector2d(found[id].x, found[id].y);
+    corner.sigma = options_.default_sigma_px;
+    if (options_.refine) {
+      Eigen::Vector2d uv = corner.uv;
+      double sigma = 0.0;
+      if (RefineCorner(gray, half_window, &uv, &sigma) &&
+          (uv - corner.uv).norm() <= options_.max_refinement_jump_px) {
+        corner.uv = uv;
+        corner.sigma = std::max(options_.min_sigma_px, sigma);
+      } else {
+        result.rejected.push_back({id, RejectReason::kRefinementJump});
+        continue;
+      }
+    }
+    result.corners.push_back(corner);
+  }
+  result.board_found = !result.corners.empty();
+  return result;
+}
+
+std::vector<DetectionResult> Detector::DetectFiles(
+    const std::vector<std::string>& paths,
+    const std::function<void(size_t, size_t)>& progress) const {
+  std::vector<DetectionResult> results(paths.size());
+  std::atomic<size_t> next{0};
+  std::mutex progress_mutex;
+  size_t done = 0;
+  auto worker = [&] {
+    for (size_t i = next++; i < paths.size(); i = next++) {
+      const cv::Mat image = cv::imread(paths[i], cv::IMREAD_UNCHANGED);
+      if (image.empty()) {
+        results[i].error = "cannot read image " + paths[i];
+      } else {
+        results[i] = Detect(image);
+        if (!results[i].error.empty())
+          results[i].error = paths[i] + ": " + results[i].error;
+      }
+      if (progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(++done, paths.size());
+      }
+    }
+  };
+  int threads = options_.threads > 0 ? options_.threads
+                                     : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::clamp(threads, 1, std::max<int>(1, static_cast<int>(paths.size())));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t)
+    pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool)
+    t.join();
+  return results;
+}
+
+}  // namespace ctcal
