@@ -174,7 +174,7 @@ struct PinholeEquidistantModel {
 
     // Within 1e-8 rad of the axis theta_d/r = 1/z up to O(theta^2) = 1e-16: use the limit, which
     // also keeps sqrt(r2) (infinite derivative at 0) out of the Jets.
-    if (r2 < T(1e-16) * z * z) {
+    if (r2 <= T(1e-16) * z * z) {
       if (!(z > T(0)))
         return false;
       const T z_inv = T(1) / z;
