@@ -53,7 +53,7 @@ class CommandLine {
     namespace po = boost::program_options;
     try {
       const po::positional_options_description no_positionals;
-      po::store(po::command_line_parser(argc - 1, argv + 1)
+      po::store(po::command_line_parser(argc, argv)  // skips argv[0], the name
                     .options(options_)
                     .positional(no_positionals)
                     .style(po::command_line_style::default_style &
