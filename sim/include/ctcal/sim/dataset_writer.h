@@ -1,0 +1,31 @@
+// Writes a simulated dataset in the layout of SPEC sections 6 and 7:
+//   DATA/<imu>/data.csv       #timestamp [ns],w_x,w_y,w_z [rad/s],a_x,a_y,a_z [m/s^2]
+//   DATA/<gyro>/data.csv      #timestamp [ns],w_x,w_y,w_z [rad/s]
+//   DATA/<sensor>/biases.csv  #timestamp [ns],bw_x,bw_y,bw_z[,ba_x,ba_y,ba_z]   (own clock)
+//   DATA/<cam>/data.csv       #timestamp [ns],filename   (every frame; <ns>.png)
+//   DATA/<cam>/corners.csv    #timestamp [ns],corner_id,u,v,sigma
+//   DATA/groundtruth/data.csv EuRoC's state_groundtruth_estimate0 columns
+//   DATA/truth.yaml, DATA/rig.yaml, DATA/target.yaml
+// Numbers are written as the shortest decimal that reads back to the same double, so equal
+// datasets give byte-identical files.
+#pragma once
+
+#include <string>
+
+#include "ctcal/sensors/rig.h"
+#include "ctcal/sim/simulator.h"
+
+namespace ctcal::sim {
+
+struct WriteOptions {
+  // With rendered images the calibrator must detect: the noise-free corners go to
+  // corners_true.csv (no sigma column) instead of corners.csv.
+  bool corners_true_only = false;
+};
+
+// Creates `dir` (and parents) and writes everything. `guess` is the rig.yaml (initial guesses).
+// Throws std::runtime_error naming the path that could not be created or written.
+void WriteDataset(const SimulatedDataset& data, const RigConfig& guess, const std::string& dir,
+                  const WriteOptions& options = {});
+
+}  // namespace ctcal::sim
