@@ -1,0 +1,54 @@
+// Kalibr-compatible files written beside a result (SPEC section 7), and Kalibr's files read back
+// as an initial guess.
+//
+// camchain-imucam.yaml (rig with IMUs) / camchain.yaml (camera-only rig): `cam0`, `cam1`, ... in
+// rig order (a camera-only rig puts its base camera first), each with camera_model, intrinsics,
+// distortion_model, distortion_coeffs, resolution, rostopic, cam_overlaps and
+//   T_cam_imu         = T_C_b = inverse(T_B_C) expressed in Kalibr's IMU frame b (below),
+//   timeshift_cam_imu = time_offset (t_imu = t_cam + shift, SPEC section 2),
+//   T_cn_cnm1         = T_Cn_B * T_B_Cn-1 (cameras n > 0).
+// imu.yaml: `imu0` (the base), `imu1`, ... with T_i_b, time_offset, Kalibr's noise keys,
+// update_rate, rostopic and the model: `calibrated` for model none, else `scale-misalignment`
+// with gyroscopes {M, A, C_gyro_i} and accelerometers {M} (kalibr_imu_model.h).
+//
+// Frames: Kalibr's IMU frame i of a scale-misaligned IMU keeps the accelerometer's x axis, ours
+// (upper-triangular D) a triad's z axis; ToKalibrScaleMisalignment returns the rotation R_i_I
+// between them, and every Kalibr transform is written in Kalibr's frames: b = i of imu0, so
+// T_cam_imu = inverse(T_B_C) * T_B_b and T_i_b = T_i_S * inverse(T_B_S) * T_B_b. With model
+// `none` (Kalibr's `calibrated`) i = I and nothing changes. Gyroscope-only sensors have no Kalibr
+// counterpart and are not written.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ctcal/sensors/rig.h"
+
+namespace ctcal {
+
+// `cam_overlaps[n]`: the Kalibr indices of the cameras whose views overlap camera n's; empty:
+// every other camera (Kalibr computes it from shared target views, which a rig file lacks).
+std::string EmitKalibrCamchain(const RigConfig& rig,
+                               const std::vector<std::vector<int>>& cam_overlaps = {});
+std::string EmitKalibrImu(const RigConfig& rig);
+// Writes camchain-imucam.yaml and imu.yaml (rig with IMUs) or camchain.yaml (camera-only) into
+// `dir`; returns the paths written.
+std::vector<std::string> SaveKalibrFiles(const RigConfig& rig, const std::string& dir,
+                                         const std::vector<std::vector<int>>& cam_overlaps = {});
+
+// The sensors of Kalibr files, as an initial guess. Cameras are named as in the file (cam0, ...);
+// IMUs imu0 (Kalibr's reference), imu1, ... Kalibr's single-IMU input file (keys at the top
+// level, no imu0:) is accepted too. Throws std::runtime_error "<file>:<line>: <where>: <what>".
+struct KalibrImportOptions {
+  // The model a `scale-misalignment` IMU is imported into (every Kalibr result fits imu2/full).
+  ImuModel imu_model = ImuModel::kImu2;
+  GSensitivity g_sensitivity = GSensitivity::kFull;
+};
+
+// A rig from Kalibr files: `imu_yaml` empty for a camera-only camchain.yaml (then cam0 is the
+// base and T_B_S chains T_cn_cnm1). Transforms are converted into our frames (the inverse of the
+// writer's). Estimate sets take the SPEC defaults.
+RigConfig RigFromKalibr(const std::string& camchain_yaml, const std::string& imu_yaml,
+                        const TargetConfig& target, const KalibrImportOptions& options = {});
+
+}  // namespace ctcal
