@@ -1,12 +1,10 @@
 #include "ctcal/sim/dataset_writer.h"
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
-#include "ctcal/sensors/number_format.h"
+#include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/targets/target_config.h"
 
@@ -14,65 +12,6 @@ namespace ctcal::sim {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A text file written with stdio (much faster than iostreams for ~10^5 lines); every failure,
-// including a short write found at close, throws with the path.
-class CsvFile {
- public:
-  CsvFile(const fs::path& path, const char* header) : path_(path.string()) {
-    file_ = std::fopen(path_.c_str(), "w");
-    if (file_ == nullptr)
-      throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
-    std::fputs(header, file_);
-    std::fputc('\n', file_);
-  }
-  ~CsvFile() {
-    if (file_ != nullptr)
-      std::fclose(file_);
-  }
-  CsvFile(const CsvFile&) = delete;
-  CsvFile& operator=(const CsvFile&) = delete;
-
-  CsvFile& Int(std::int64_t v) {
-    Separator();
-    std::fprintf(file_, "%lld", static_cast<long long>(v));
-    return *this;
-  }
-  CsvFile& Num(double v) {
-    Separator();
-    const std::string s = FormatDouble(v);
-    std::fwrite(s.data(), 1, s.size(), file_);
-    return *this;
-  }
-  CsvFile& Vec(const Eigen::Vector3d& v) { return Num(v.x()).Num(v.y()).Num(v.z()); }
-  CsvFile& Str(const std::string& s) {
-    Separator();
-    std::fputs(s.c_str(), file_);
-    return *this;
-  }
-  void EndLine() {
-    std::fputc('\n', file_);
-    first_ = true;
-  }
-  void Close() {
-    const bool failed = std::ferror(file_) != 0;
-    const int rc = std::fclose(file_);
-    file_ = nullptr;
-    if (failed || rc != 0)
-      throw std::runtime_error("error while writing " + path_);
-  }
-
- private:
-  void Separator() {
-    if (!first_)
-      std::fputc(',', file_);
-    first_ = false;
-  }
-
-  std::string path_;
-  std::FILE* file_ = nullptr;
-  bool first_ = true;
-};
 
 fs::path MakeDir(const fs::path& dir) {
   std::error_code ec;
@@ -83,69 +22,58 @@ fs::path MakeDir(const fs::path& dir) {
 }
 
 void WriteInertial(const InertialData& d, const fs::path& dir) {
-  {
-    CsvFile f(dir / "data.csv", d.has_accel ? "#timestamp [ns],w_x,w_y,w_z [rad/s],a_x,a_y,a_z "
-                                              "[m/s^2]"
-                                            : "#timestamp [ns],w_x,w_y,w_z [rad/s]");
-    for (const InertialSample& s : d.samples) {
-      f.Int(s.t_ns).Vec(s.w_m);
-      if (d.has_accel)
-        f.Vec(s.a_m);
-      f.EndLine();
-    }
-    f.Close();
-  }
-  CsvFile f(dir / "biases.csv", d.has_accel ? "#timestamp [ns],bw_x,bw_y,bw_z,ba_x,ba_y,ba_z"
-                                            : "#timestamp [ns],bw_x,bw_y,bw_z");
-  for (const BiasSample& b : d.biases) {
-    f.Int(b.t_ns).Vec(b.b_g);
+  std::vector<ctcal::BiasSample> biases;
+  biases.reserve(d.biases.size());
+  for (const BiasState& b : d.biases) {
+    biases.push_back({b.t_ns, b.b_g, std::nullopt});
     if (d.has_accel)
-      f.Vec(b.b_a);
-    f.EndLine();
+      biases.back().b_a = b.b_a;
   }
-  f.Close();
+  WriteBiasesCsv((dir / "biases.csv").string(), biases);
+  if (d.has_accel) {
+    std::vector<ImuSample> samples;
+    samples.reserve(d.samples.size());
+    for (const InertialSample& s : d.samples)
+      samples.push_back({s.t_ns, s.w_m, s.a_m});
+    WriteImuCsv((dir / "data.csv").string(), samples);
+  } else {
+    std::vector<GyroSample> samples;
+    samples.reserve(d.samples.size());
+    for (const InertialSample& s : d.samples)
+      samples.push_back({s.t_ns, s.w_m});
+    WriteGyroCsv((dir / "data.csv").string(), samples);
+  }
 }
 
 void WriteCamera(const CameraData& d, const fs::path& dir, const WriteOptions& options) {
-  {
-    CsvFile f(dir / "data.csv", "#timestamp [ns],filename");
-    for (const std::int64_t ns : d.frames_ns) {
-      f.Int(ns).Str(std::to_string(ns) + ".png");
-      f.EndLine();
-    }
-    f.Close();
+  std::vector<ImageEntry> images;
+  images.reserve(d.frames_ns.size());
+  for (const std::int64_t ns : d.frames_ns)
+    images.push_back({ns, std::to_string(ns) + ".png"});
+  WriteImageCsv((dir / "data.csv").string(), images);
+  std::vector<CornerObservation> corners;
+  corners.reserve(d.corners.size());
+  for (const SimulatedCorner& c : d.corners) {
+    if (options.corners_true_only)
+      corners.push_back({c.t_ns, c.corner_id, c.uv_true.x(), c.uv_true.y(), std::nullopt});
+    else
+      corners.push_back({c.t_ns, c.corner_id, c.uv.x(), c.uv.y(), c.sigma});
   }
-  if (options.corners_true_only) {
-    CsvFile f(dir / "corners_true.csv", "#timestamp [ns],corner_id,u,v");
-    for (const CornerObservation& c : d.corners) {
-      f.Int(c.t_ns).Int(c.corner_id).Num(c.uv_true.x()).Num(c.uv_true.y());
-      f.EndLine();
-    }
-    f.Close();
-    return;
-  }
-  CsvFile f(dir / "corners.csv", "#timestamp [ns],corner_id,u,v,sigma");
-  for (const CornerObservation& c : d.corners) {
-    f.Int(c.t_ns).Int(c.corner_id).Num(c.uv.x()).Num(c.uv.y()).Num(c.sigma);
-    f.EndLine();
-  }
-  f.Close();
+  WriteCornersCsv((dir / (options.corners_true_only ? "corners_true.csv" : "corners.csv")).string(),
+                  corners);
 }
 
 void WriteGroundTruth(const std::vector<GroundTruthSample>& gt, const fs::path& dir) {
-  CsvFile f(dir / "data.csv",
-            "#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z,bw_x,bw_y,bw_z,ba_x,ba_y,"
-            "ba_z");
+  std::vector<GroundTruthState> states;
+  states.reserve(gt.size());
   for (const GroundTruthSample& s : gt) {
     // q and -q are the same rotation; a positive w makes the file unambiguous.
     Eigen::Quaterniond q = s.state.q_W_B;
     if (q.w() < 0.0)
       q.coeffs() = -q.coeffs();
-    f.Int(s.t_ns).Vec(s.state.p_W_B).Num(q.w()).Num(q.x()).Num(q.y()).Num(q.z());
-    f.Vec(s.state.v_W).Vec(s.b_g).Vec(s.b_a);
-    f.EndLine();
+    states.push_back({s.t_ns, s.state.p_W_B, q, s.state.v_W, s.b_g, s.b_a});
   }
-  f.Close();
+  WriteGroundTruthCsv((dir / "data.csv").string(), states);
 }
 
 }  // namespace

@@ -131,7 +131,7 @@ InertialData SimulateInertial(const SensorConfig& s, std::size_t index, bool is_
       sample.w_m = gyro_model.RawFromTrue(ideal.w_S, b_g) + noise_rng.Gaussian3(sigma_w);
     }
     out.samples.push_back(sample);
-    out.biases.push_back(BiasSample{ns, b_g, b_a});
+    out.biases.push_back(BiasState{ns, b_g, b_a});
     // Euler-Maruyama step of the Wiener process to the next sample.
     b_g += walk_rng.Gaussian3(walk_g);
     if (is_imu)
@@ -217,7 +217,7 @@ CameraData SimulateCamera(const SensorConfig& s, std::size_t index, bool is_base
       const double nv = rng.Gaussian(sigma);
       if (dropped)
         continue;
-      CornerObservation obs;
+      SimulatedCorner obs;
       obs.t_ns = ns;
       obs.corner_id = id;
       obs.uv_true = uv;

@@ -6,8 +6,9 @@
 //   DATA/<cam>/corners.csv    #timestamp [ns],corner_id,u,v,sigma
 //   DATA/groundtruth/data.csv EuRoC's state_groundtruth_estimate0 columns
 //   DATA/truth.yaml, DATA/rig.yaml, DATA/target.yaml
-// Numbers are written as the shortest decimal that reads back to the same double, so equal
-// datasets give byte-identical files.
+// The CSV files go through sensors/dataset.h's writers (the readers' exact counterparts); numbers
+// are the shortest decimals that read back to the same doubles, so equal datasets give
+// byte-identical files.
 #pragma once
 
 #include <string>

@@ -54,7 +54,7 @@ struct InertialSample {
   Eigen::Vector3d a_m = Eigen::Vector3d::Zero();  // zero for a gyroscope-only sensor
 };
 
-struct BiasSample {
+struct BiasState {
   std::int64_t t_ns = 0;  // the sensor's own clock
   Eigen::Vector3d b_g = Eigen::Vector3d::Zero();
   Eigen::Vector3d b_a = Eigen::Vector3d::Zero();
@@ -64,10 +64,10 @@ struct InertialData {
   std::string sensor;
   bool has_accel = true;  // false for type gyro
   std::vector<InertialSample> samples;
-  std::vector<BiasSample> biases;  // one per sample, the biases that sample was taken with
+  std::vector<BiasState> biases;  // one per sample, the biases that sample was taken with
 };
 
-struct CornerObservation {
+struct SimulatedCorner {
   std::int64_t t_ns = 0;  // the image's stamp on the camera's clock
   int corner_id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();       // with pixel noise
@@ -78,7 +78,7 @@ struct CornerObservation {
 struct CameraData {
   std::string sensor;
   std::vector<std::int64_t> frames_ns;  // every image stamp, with or without corners
-  std::vector<CornerObservation> corners;
+  std::vector<SimulatedCorner> corners;
 };
 
 // The base frame's state at a base IMU sample, with the base IMU's biases.
@@ -119,8 +119,9 @@ class RotatedTrajectory : public Trajectory {
 // The scenarios move a frame T whose -z axis is where cameras should look (scenario.h). A rig's
 // B is mounted in T by the axis permutation (one of the 24 rotations by multiples of 90 deg) that
 // points the optical axis of its reference camera (the first camera) closest to -z_T: identity
-// for the default rig; for a camera-only rig, B is that camera and the mount is Rx(pi). Keeping
-// to axis permutations keeps the degenerate scenarios exact about B's own axes.
+// for the default rig; for a camera-only rig, B is that camera and the mount is a half turn
+// taking z_B to -z_T. Keeping to axis permutations keeps the degenerate scenarios exact about
+// B's own axes.
 Eigen::Matrix3d ScenarioMount(const RigConfig& rig);
 
 }  // namespace ctcal::sim
