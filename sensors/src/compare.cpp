@@ -112,7 +112,10 @@ Comparison CompareRigs(const RigConfig& truth, const RigConfig& result) {
   s.count = static_cast<int>(c.rows.size());
   for (const ComparisonRow& row : c.rows) {
     if (!row.error_over_sigma) {
-      ++s.undetermined;
+      if (row.sigma && std::isinf(*row.sigma))
+        ++s.undetermined;
+      else
+        ++s.no_sigma;
       continue;
     }
     ++s.with_sigma;
@@ -160,7 +163,7 @@ std::string FormatComparison(const Comparison& c) {
   }
   const ComparisonSummary& s = c.summary;
   out << "summary: " << s.count << " estimated scalars, " << s.with_sigma << " with a sigma, "
-      << s.undetermined << " undetermined";
+      << s.undetermined << " undetermined (sigma .inf), " << s.no_sigma << " without a sigma";
   if (s.fraction_within_3_sigma) {
     std::snprintf(line, sizeof(line), "; %d (%.1f%%) within 3 sigma; worst %s at %.3f sigma",
                   s.within_3_sigma, 100.0 * *s.fraction_within_3_sigma, s.worst_name->c_str(),
@@ -180,7 +183,7 @@ std::string ComparisonJson(const Comparison& c) {
         << ", \"truth\": " << JsonNumber(r.truth) << ", \"estimate\": " << JsonNumber(r.estimate)
         << ", \"error\": " << JsonNumber(r.error) << ", \"sigma\": " << JsonNumber(r.sigma)
         << ", \"error_over_sigma\": " << JsonNumber(r.error_over_sigma)
-        << ", \"undetermined\": " << (r.error_over_sigma ? "false" : "true") << "}";
+        << ", \"undetermined\": " << (r.sigma && std::isinf(*r.sigma) ? "true" : "false") << "}";
   }
   out << (c.rows.empty() ? "],\n" : "\n  ],\n") << "  \"rotations\": [";
   for (std::size_t i = 0; i < c.rotations.size(); ++i) {
@@ -189,7 +192,8 @@ std::string ComparisonJson(const Comparison& c) {
   }
   const ComparisonSummary& s = c.summary;
   out << "],\n  \"summary\": {\"count\": " << s.count << ", \"with_sigma\": " << s.with_sigma
-      << ", \"undetermined\": " << s.undetermined << ", \"within_3_sigma\": " << s.within_3_sigma
+      << ", \"undetermined\": " << s.undetermined << ", \"no_sigma\": " << s.no_sigma
+      << ", \"within_3_sigma\": " << s.within_3_sigma
       << ", \"fraction_within_3_sigma\": " << JsonNumber(s.fraction_within_3_sigma)
       << ", \"worst\": ";
   if (s.worst_name) {

@@ -34,7 +34,8 @@ struct RotationComparison {
 struct ComparisonSummary {
   int count = 0;         // rows
   int with_sigma = 0;    // rows with a finite, positive sigma
-  int undetermined = 0;  // rows with sigma .inf (or none given)
+  int undetermined = 0;  // rows with sigma .inf: the data does not determine them
+  int no_sigma = 0;      // rows whose sigma the result does not give (or gives as .nan or 0)
   int within_3_sigma = 0;
   // within_3_sigma / with_sigma; nullopt when no row has a sigma.
   std::optional<double> fraction_within_3_sigma;
