@@ -21,8 +21,12 @@
 // Evaluations stack the gyroscope and the accelerometer into one 6-vector out = [w; a], so each
 // Jacobian has 6 rows: rows 0-2 the angular rate, rows 3-5 the specific force.
 // Jacobians are with respect to the tangent of each block. A Ceres CostFunction that wants the
-// ambient (4-column) Jacobian of the quaternion uses J_tangent * So3LeftManifold::MinusJacobian(q),
-// which Ceres' PlusJacobian maps back to J_tangent exactly.
+// ambient (4-column) Jacobian of the quaternion uses J_tangent * So3LeftManifold::MinusJacobian(q)
+// (LiftToAmbient in spline/so3_manifold.h), which Ceres' PlusJacobian maps back to J_tangent.
+//
+// The calibrator's inertial residual is r = W (z_m - ImuRawFromTrue(...)) with W = 1/sigma_d of
+// the raw white noise (inertial_noise.h): the noise is additive on the raw reading, so the
+// residual is whitened exactly there, and its Jacobians are -W times the ones below.
 #pragma once
 
 #include <Eigen/Core>
@@ -195,6 +199,10 @@ class ImuIntrinsics {
   double* Da() { return layout_.Da == MatrixForm::kAbsent ? nullptr : Da_.data(); }
   double* Tg() { return layout_.Tg == MatrixForm::kAbsent ? nullptr : Tg_.data(); }
   double* q_rotation() { return layout_.HasRotation() ? q_.data() : nullptr; }
+  const double* Dw() const { return blocks().Dw; }
+  const double* Da() const { return blocks().Da; }
+  const double* Tg() const { return blocks().Tg; }
+  const double* q_rotation() const { return blocks().q_rotation; }
   int DwSize() const { return StoredSize(layout_.Dw); }
   int DaSize() const { return StoredSize(layout_.Da); }
   int TgSize() const { return StoredSize(layout_.Tg); }

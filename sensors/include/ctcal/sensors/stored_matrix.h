@@ -66,7 +66,8 @@ Eigen::Matrix3d CheckedMatrixFromStored(MatrixForm f, const std::vector<double>&
 // reflection, which no frame change can absorb).
 void CheckScaleMatrix(MatrixForm f, const Eigen::Matrix3d& D, const std::string& key);
 // A rotation matrix: finite, orthonormal to 1e-6 (files carry ~9 digits) and determinant +1.
-// Returns the nearest unit quaternion.
+// Returns its unit quaternion (exact for an exact rotation; for one orthonormal to within the
+// tolerance, the normalised quaternion of Eigen's conversion, within about that tolerance of R).
 Eigen::Quaterniond CheckedRotation(const Eigen::Matrix3d& R, const std::string& key);
 
 }  // namespace ctcal
