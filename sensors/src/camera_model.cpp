@@ -126,6 +126,13 @@ int CameraModel::NumIntrinsics() const {
   return VisitCameraModel(type_, [](auto model) { return decltype(model)::kNumProjectionParams; });
 }
 
+void CameraModel::ParamBounds(Eigen::VectorXd* lower, Eigen::VectorXd* upper) const {
+  lower->resize(NumParams());
+  upper->resize(NumParams());
+  VisitCameraModel(type_,
+                   [&](auto model) { decltype(model)::ParamBounds(lower->data(), upper->data()); });
+}
+
 std::vector<std::string> CameraModel::ParamNames() const {
   return VisitCameraModel(type_, [](auto model) {
     const auto names = decltype(model)::ParamNames();

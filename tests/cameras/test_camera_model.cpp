@@ -115,7 +115,7 @@ TEST(CameraModelFactory, ParametersOutsideTheDomainAreClearErrors) {
   EXPECT_EQ(CreateError({"omni", {-0.1, 600, 600, 376, 240}, "none", {}}),
             "camera model 'omni' with distortion 'none': omni xi must be >= 0, got -0.100000");
   EXPECT_EQ(CreateError({"ds", {-0.2, 1.5, 158, 158, 254, 256}, "none", {}}),
-            "camera model 'ds' with distortion 'none': ds needs xi in (-1, 1] and alpha in [0, 1], "
+            "camera model 'ds' with distortion 'none': ds needs xi in [-1, 1] and alpha in [0, 1], "
             "got xi -0.200000, alpha 1.500000");
   EXPECT_EQ(CreateError({"eucm", {0.6, 0.0, 460, 459, 365, 249}, "none", {}}),
             "camera model 'eucm' with distortion 'none': eucm needs alpha in [0, 1] and beta > 0, "

@@ -151,6 +151,26 @@ TYPED_TEST(CameraProjectionTest, ParamsAreValidAndNamed) {
     EXPECT_TRUE(Model::CheckParams(c.params.data(), &why)) << why;
   }
   EXPECT_EQ(static_cast<int>(Model::ParamNames().size()), Model::kNumParams);
+
+  // The test parameters lie inside the solver bounds, and the finite bounds themselves are valid
+  // parameters (Ceres' bounds are inclusive).
+  double lower[Model::kNumParams], upper[Model::kNumParams];
+  Model::ParamBounds(lower, upper);
+  for (const Case& c : Cases<Model>()) {
+    for (int i = 0; i < Model::kNumParams; ++i) {
+      EXPECT_GE(c.params[i], lower[i]) << Model::ParamNames()[i];
+      EXPECT_LE(c.params[i], upper[i]) << Model::ParamNames()[i];
+      for (double bound : {lower[i], upper[i]}) {
+        if (!std::isfinite(bound))
+          continue;
+        std::vector<double> at_bound = c.params;
+        at_bound[i] = bound;
+        std::string why;
+        EXPECT_TRUE(Model::CheckParams(at_bound.data(), &why))
+            << Model::ParamNames()[i] << " = " << bound << ": " << why;
+      }
+    }
+  }
 }
 
 // d uv / d p_C and d uv / d params against central differences. Step h = 1e-6 relative; the

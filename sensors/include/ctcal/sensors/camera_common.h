@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <type_traits>
 
 namespace ctcal {
@@ -28,6 +29,17 @@ enum class CameraModelType {
 // non-deduced context so that a literal nullptr ("don't compute") can be passed.
 template <typename T, int Rows, int Cols>
 using JacobianPtr = typename std::common_type<Eigen::Matrix<T, Rows, Cols>>::type*;
+
+// Box bounds of a model's parameters for the solver (Ceres' SetParameterLowerBound/UpperBound):
+// the closed domain on which the model's formulas hold; +-infinity where a parameter is free.
+// Positive focal lengths are not bounded: a solver that drives one through 0 has diverged anyway,
+// and CameraModel::SetParams reports it.
+inline void FreeBounds(int n, double* lower, double* upper) {
+  for (int i = 0; i < n; ++i) {
+    lower[i] = -std::numeric_limits<double>::infinity();
+    upper[i] = std::numeric_limits<double>::infinity();
+  }
+}
 
 // Closed-form and iterative unprojections alike end with this check: the ray must project back
 // (validly) onto the pixel it came from. It catches a ray on the wrong branch of a model (e.g. the

@@ -20,7 +20,7 @@ namespace ctcal {
 // Valid (paper, eq. 43) for z > -w2 d1 with
 //   w1 = alpha / (1 - alpha) (alpha <= 0.5) or (1 - alpha) / alpha (alpha > 0.5),
 //   w2 = (w1 + xi) / sqrt(2 w1 xi + xi^2 + 1).
-// Parameters: alpha in [0, 1], xi in (-1, 1] (the paper's range; basalt clamps to [-1, 1]).
+// Parameters: alpha in [0, 1], xi in [-1, 1] (basalt's clamp).
 // Unprojection in closed form (paper, eqs. 47-50):
 //   m = ((u - pu)/fu, (v - pv)/fv), r2 = |m|^2 (needs r2 <= 1/(2 alpha - 1) for alpha > 0.5)
 //   mz = (1 - alpha^2 r2) / (alpha sqrt(1 - (2 alpha - 1) r2) + 1 - alpha)
@@ -39,13 +39,21 @@ struct DoubleSphereModel {
     if (!camera_internal::CheckFinite(params, kNumParams, why) ||
         !camera_internal::CheckFocal(params[2], params[3], why))
       return false;
-    if (!(params[0] > -1.0 && params[0] <= 1.0) || !(params[1] >= 0.0 && params[1] <= 1.0)) {
+    if (!(params[0] >= -1.0 && params[0] <= 1.0) || !(params[1] >= 0.0 && params[1] <= 1.0)) {
       if (why)
-        *why = "ds needs xi in (-1, 1] and alpha in [0, 1], got xi " + std::to_string(params[0]) +
+        *why = "ds needs xi in [-1, 1] and alpha in [0, 1], got xi " + std::to_string(params[0]) +
                ", alpha " + std::to_string(params[1]);
       return false;
     }
     return true;
+  }
+
+  static void ParamBounds(double* lower, double* upper) {
+    FreeBounds(kNumParams, lower, upper);
+    lower[0] = -1.0;  // xi
+    upper[0] = 1.0;
+    lower[1] = 0.0;  // alpha
+    upper[1] = 1.0;
   }
 
   template <typename T>

@@ -47,6 +47,14 @@ struct EucmModel {
     return true;
   }
 
+  // beta > 0 strictly; the solver bound keeps it at least 1e-8 (basalt clamps at sqrt(eps)).
+  static void ParamBounds(double* lower, double* upper) {
+    FreeBounds(kNumParams, lower, upper);
+    lower[0] = 0.0;  // alpha
+    upper[0] = 1.0;
+    lower[1] = 1e-8;  // beta
+  }
+
   template <typename T>
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,

@@ -99,6 +99,9 @@ class CameraModel {
   // Length of the `intrinsics` part (the rest are `distortion_coeffs`).
   int NumIntrinsics() const;
   int NumDistortionCoeffs() const { return NumParams() - NumIntrinsics(); }
+  // The box on which the model's formulas hold (omni xi >= 0, ds xi in [-1, 1] and alpha in
+  // [0, 1], eucm alpha in [0, 1] and beta >= 1e-8; +-inf elsewhere), for Ceres' parameter bounds.
+  void ParamBounds(Eigen::VectorXd* lower, Eigen::VectorXd* upper) const;
   // Kalibr's symbol of each parameter ("fu", "xi", "k1", ...), in parameter order.
   std::vector<std::string> ParamNames() const;
 

@@ -51,6 +51,11 @@ struct OmniModel {
     return true;
   }
 
+  static void ParamBounds(double* lower, double* upper) {
+    FreeBounds(kNumParams, lower, upper);
+    lower[0] = 0.0;  // xi
+  }
+
   template <typename T>
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,

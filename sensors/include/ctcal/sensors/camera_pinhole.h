@@ -66,6 +66,8 @@ struct PinholeModel {
            camera_internal::CheckFocal(params[0], params[1], why);
   }
 
+  static void ParamBounds(double* lower, double* upper) { FreeBounds(kNumParams, lower, upper); }
+
   template <typename T>
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,
@@ -145,6 +147,8 @@ struct PinholeEquidistantModel {
     return camera_internal::CheckFinite(params, kNumParams, why) &&
            camera_internal::CheckFocal(params[0], params[1], why);
   }
+
+  static void ParamBounds(double* lower, double* upper) { FreeBounds(kNumParams, lower, upper); }
 
   // theta_d(theta) and its derivative.
   template <typename T>
