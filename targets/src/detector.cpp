@@ -29,6 +29,8 @@ const char* ToString(RejectReason reason) {
       return "id not on this board";
     case RejectReason::kRefinementJump:
       return "sub-pixel refinement jumped";
+    case RejectReason::kBadBorder:
+      return "black border not as printed (wrong blackTagBorder?)";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -213,6 +215,64 @@ std::vector<TagDetection> RunApriltag(apriltag_detector_t* detector, const cv::M
   return out;
 }
 
+// libapriltag checks only the outermost black ring of a tag. With the family for a 2-bit border,
+// a 1-bit tag (or other clutter) can still decode within 2 bit errors; the second black ring,
+// which such a tag does not have, tells them apart: every cell of it must be darker than the
+// midpoint between the tag's outer black ring and the white outside.
+bool InnerBorderIsBlack(const cv::Mat& gray, const TagDetection& tag, int black_border) {
+  if (black_border < 2)
+    return true;
+  const int cells = Board::kTagDataBits + 2 * black_border;
+  // Tag cell coordinates (x right, y down the printed tag) -> pixels.
+  const std::vector<cv::Point2f> tag_cells = {
+      {0.0f, static_cast<float>(cells)},
+      {static_cast<float>(cells), static_cast<float>(cells)},
+      {static_cast<float>(cells), 0.0f},
+      {0.0f, 0.0f}};
+  std::vector<cv::Point2f> pixels;
+  for (const Eigen::Vector2d& c : tag.corners)
+    pixels.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+  const cv::Mat H = cv::getPerspectiveTransform(tag_cells, pixels);
+  auto ring = [cells](double offset, int from, int to) {
+    // Cell centres of the ring `offset` cells inside the quad (negative: outside), sides only
+    // between `from` and `to` (outside, the corner squares must be skipped).
+    std::vector<cv::Point2f> points;
+    for (int k = from; k < to; ++k) {
+      const float a = static_cast<float>(k + 0.5);
+      const float lo = static_cast<float>(offset + 0.5);
+      const float hi = static_cast<float>(cells - offset - 0.5);
+      points.insert(points.end(), {{a, lo}, {a, hi}, {lo, a}, {hi, a}});
+    }
+    return points;
+  };
+  auto sample = [&gray, &H](std::vector<cv::Point2f> points) {
+    cv::perspectiveTransform(points, points, H);
+    std::vector<double> values;
+    for (const cv::Point2f& p : points) {
+      const int x = static_cast<int>(std::lround(p.x));
+      const int y = static_cast<int>(std::lround(p.y));
+      if (x >= 0 && y >= 0 && x < gray.cols && y < gray.rows)
+        values.push_back(gray.at<uint8_t>(y, x));
+    }
+    return values;
+  };
+  auto median = [](std::vector<double> v) {
+    if (v.empty())
+      return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double black = median(sample(ring(0, 1, cells - 1)));
+  const double white = median(sample(ring(-1, 2, cells - 2)));
+  if (!(white > black))
+    return false;
+  const std::vector<double> inner = sample(ring(1, 1, cells - 1));
+  const double threshold = 0.5 * (black + white);
+  const auto dark =
+      std::count_if(inner.begin(), inner.end(), [threshold](double v) { return v < threshold; });
+  return !inner.empty() && dark >= static_cast<long>(0.9 * static_cast<double>(inner.size()));
+}
+
 // The maximum filter over the pixels {0, 1}^2 up-left of each pixel erodes black by that set: an
 // edge with outward unit normal n (image axes) moves inwards by d = -min(0, n_x, n_y, n_x + n_y).
 // Moving both edges at a corner back out by their d solves n_1^T dc = d_1, n_2^T dc = d_2.
@@ -252,18 +312,29 @@ void UndoThinning(TagDetection* tag) {
 // fits its corners to whole edges, so the small bite this takes out of a tag's corner does not
 // move them; the sub-pixel refinement runs on the untouched image anyway.
 std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv::Mat& gray,
-                                         const Board& board) {
+                                         const Board& board, std::set<int>* bad_border) {
+  auto run = [&](const cv::Mat& image) {
+    std::vector<TagDetection> tags = RunApriltag(detector, image);
+    std::vector<TagDetection> kept;
+    for (const TagDetection& tag : tags) {
+      if (InnerBorderIsBlack(gray, tag, board.config().black_tag_border))
+        kept.push_back(tag);
+      else
+        bad_border->insert(tag.id);
+    }
+    return kept;
+  };
   // Tags by id; a run that decodes an id twice keeps both (the duplicate rule needs them).
   // `confirmed` come from the image itself or its painted copy, `seeds` from the thinned copy.
   std::map<int, std::vector<TagDetection>> confirmed;
   std::map<int, std::vector<TagDetection>> seeds;
   auto merge = [](const std::vector<TagDetection>& tags,
                   std::map<int, std::vector<TagDetection>>* into) {
-    std::map<int, std::vector<TagDetection>> run;
+    std::map<int, std::vector<TagDetection>> by_id;
     for (const TagDetection& tag : tags)
-      run[tag.id].push_back(tag);
+      by_id[tag.id].push_back(tag);
     bool added = false;
-    for (auto& [id, list] : run) {
+    for (auto& [id, list] : by_id) {
       added |= into->count(id) == 0;
       (*into)[id] = std::move(list);
     }
@@ -275,7 +346,7 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
       n += entry.first < board.NumTags() ? 1 : 0;
     return n;
   };
-  merge(RunApriltag(detector, gray), &confirmed);
+  merge(run(gray), &confirmed);
   if (board_ids(confirmed) < board.NumTags()) {
     // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
     // pixel on its top and left. Their corners are biased by up to a pixel: they only seed the
@@ -285,6 +356,12 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
     std::vector<TagDetection> thinned_tags = RunApriltag(detector, thinned);
     for (TagDetection& tag : thinned_tags)
       UndoThinning(&tag);
+    thinned_tags.erase(std::remove_if(thinned_tags.begin(), thinned_tags.end(),
+                                      [&](const TagDetection& tag) {
+                                        return !InnerBorderIsBlack(gray, tag,
+                                                                   board.config().black_tag_border);
+                                      }),
+                       thinned_tags.end());
     merge(thinned_tags, &seeds);
   }
   const double size = board.config().tag_size;
@@ -340,7 +417,7 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
         }
       }
     }
-    if (!painted_new || !merge(RunApriltag(detector, work), &confirmed))
+    if (!painted_new || !merge(run(work), &confirmed))
       break;
   }
   for (auto& entry : seeds)
@@ -407,9 +484,15 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
 DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
   DetectionResult result;
   std::unique_ptr<TagContext> context = AcquireTagContext();
-  const std::vector<TagDetection> tags = DetectGridTags(context->detector, gray, board_);
+  std::set<int> bad_border;
+  const std::vector<TagDetection> tags =
+      DetectGridTags(context->detector, gray, board_, &bad_border);
   ReleaseTagContext(std::move(context));
   result.tags_detected = static_cast<int>(tags.size());
+  for (int id : bad_border) {
+    if (std::none_of(tags.begin(), tags.end(), [id](const TagDetection& t) { return t.id == id; }))
+      result.rejected.push_back({id, RejectReason::kBadBorder});
+  }
 
   std::map<int, int> id_count;
   for (const TagDetection& tag : tags)

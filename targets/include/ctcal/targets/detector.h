@@ -50,6 +50,7 @@ enum class RejectReason {
   kDuplicateId,     // the same tag id decoded twice (both dropped: which one is the board's?)
   kUnknownId,       // a tag id the board does not have (another board in view, wrong file?)
   kRefinementJump,  // sub-pixel refinement moved a corner too far / did not converge
+  kBadBorder,       // decoded, but its black border is not blackTagBorder bits wide
   kTooFewTags,      // the whole view: fewer than min_tags tags left
 };
 const char* ToString(RejectReason reason);
