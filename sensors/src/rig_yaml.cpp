@@ -276,10 +276,11 @@ class RigReader {
       s.rostopic = in_.String(node["rostopic"], where + ".rostopic");
   }
 
-  void ReadInertialNoise(const YAML::Node& node, SensorConfig& s) {
+  void ReadInertialNoise(const YAML::Node& sensor_node, SensorConfig& s) {
     const std::string where = Where(s.name) + ".noise";
+    const YAML::Node node = sensor_node["noise"];
     if (!node)
-      in_.Fail(node, Where(s.name), "missing required key 'noise' (Kalibr's noise keys)");
+      in_.Fail(sensor_node, Where(s.name), "missing required key 'noise' (Kalibr's noise keys)");
     const bool gyro = s.type == SensorType::kGyro;
     const std::set<std::string>& keys = gyro ? kGyroNoiseKeys : kImuNoiseKeys;
     in_.CheckKeys(node, where, keys, gyro ? "the noise of a gyro" : "the noise of an imu");
@@ -340,7 +341,7 @@ class RigReader {
       s.R_I_a = in_.Rotation(node["R_I_a"], where + ".R_I_a");
     if (rot == "R_I_w" && node["R_I_w"])
       s.R_I_w = in_.Rotation(node["R_I_w"], where + ".R_I_w");
-    ReadInertialNoise(node["noise"], s);
+    ReadInertialNoise(node, s);
   }
 
   void ReadGyro(const YAML::Node& node, SensorConfig& s) {
@@ -355,7 +356,7 @@ class RigReader {
                   ? ReadStored(node["Dw"], where, "Dw", dw, "gyro model " + ToString(s.gyro_model))
                   : IdentityStored(dw);
     }
-    ReadInertialNoise(node["noise"], s);
+    ReadInertialNoise(node, s);
   }
 
   void ReadCamera(const YAML::Node& node, SensorConfig& s) {
