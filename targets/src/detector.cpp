@@ -531,7 +531,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
     // is two bits away, so a jump up to 0.4 bit still lands on the right one.
     const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
     const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
-    std::array<CornerObservation, 4> refined;
+    std::array<DetectedCorner, 4> refined;
     bool ok = true;
     for (size_t k = 0; k < 4; ++k) {
       refined[k].id = ids[k];
@@ -560,7 +560,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
     result.corners.clear();
   }
   std::sort(result.corners.begin(), result.corners.end(),
-            [](const CornerObservation& a, const CornerObservation& b) { return a.id < b.id; });
+            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
   result.board_found = !result.corners.empty();
   return result;
 }
@@ -613,7 +613,7 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
   }
   const int half_window = std::clamp(static_cast<int>(0.4 * min_step), 2, 12);
   for (int id = 0; id < rows * cols; ++id) {
-    CornerObservation corner;
+    DetectedCorner corner;
     corner.id = id;
     corner.uv = Eigen::Vector2d(found[id].x, found[id].y);
     corner.sigma = options_.default_sigma_px;

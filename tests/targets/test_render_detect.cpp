@@ -115,7 +115,7 @@ Errors Compare(const Board& board, const Camera& camera, const Eigen::Isometry3d
   Errors e;
   const Eigen::Isometry3d T_C_W = T_W_C.inverse();
   double sum2 = 0.0;
-  for (const CornerObservation& c : result.corners) {
+  for (const DetectedCorner& c : result.corners) {
     const Eigen::Vector2d truth = camera.Project(T_C_W * board.Corner(c.id));
     const Eigen::Vector2d d = c.uv - truth;
     sum2 += d.squaredNorm();
@@ -156,7 +156,7 @@ TEST(RenderDetect, RadtanAprilGridCornersWithinATenthOfAPixel) {
     EXPECT_LE(e.rms, 0.1) << "view " << views;
     EXPECT_LE(e.max, 0.4) << "view " << views;
     EXPECT_LT(e.mean.norm(), 0.05) << "half-pixel convention bias, view " << views;
-    for (const CornerObservation& c : result.corners) {
+    for (const DetectedCorner& c : result.corners) {
       EXPECT_GT(c.sigma, 0.0);
       EXPECT_LT(c.sigma, 0.5);
     }
@@ -231,7 +231,7 @@ TEST(RenderDetect, RollingShutterRowsSeeTheirOwnPose) {
   const DetectionResult result = Detector(board).Detect(renderer.Render(pose_of_row, 1));
   ASSERT_TRUE(result.board_found);
   double sum2_own = 0.0, sum2_global = 0.0;
-  for (const CornerObservation& c : result.corners) {
+  for (const DetectedCorner& c : result.corners) {
     const Eigen::Vector3d& p_W = board.Corner(c.id);
     // The row a corner is read at depends on where it lands: iterate v -> pose(v) -> v.
     double v = c.uv.y();

@@ -18,7 +18,7 @@
 
 namespace ctcal {
 
-struct CornerObservation {
+struct DetectedCorner {
   int id = -1;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // px, SPEC section 4
   double sigma = 0.0;                            // px, per coordinate
@@ -61,9 +61,9 @@ struct TagRejection {
 };
 
 struct DetectionResult {
-  bool board_found = false;                // a valid observation of the board (corners non-empty)
-  std::vector<CornerObservation> corners;  // sorted by id
-  int tags_detected = 0;                   // tags decoded before the rules (AprilGrid)
+  bool board_found = false;             // a valid observation of the board (corners non-empty)
+  std::vector<DetectedCorner> corners;  // sorted by id
+  int tags_detected = 0;                // tags decoded before the rules (AprilGrid)
   int tags_accepted = 0;
   std::vector<TagRejection> rejected;
   std::string error;  // set when the image could not be used at all (unreadable, empty)
