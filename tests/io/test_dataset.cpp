@@ -2,6 +2,7 @@
 // folder loader (a camera with corners needs no images).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -17,7 +18,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("ctcal_dataset_" + name);
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("ctcal_dataset_" + std::to_string(getpid()) + "_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();

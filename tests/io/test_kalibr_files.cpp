@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <unistd.h>
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
@@ -114,7 +115,9 @@ TEST(KalibrFiles, CamchainFollowsKalibrsDefinitions) {
 
 // Write -> read as an initial guess gives back the rig (up to Kalibr's model choice).
 void ExpectKalibrRoundTrip(const RigConfig& rig, const std::string& name) {
-  const std::string dir = (fs::path(::testing::TempDir()) / ("ctcal_kalibr_" + name)).string();
+  const std::string dir =
+      (fs::path(::testing::TempDir()) / ("ctcal_kalibr_" + std::to_string(getpid()) + "_" + name))
+          .string();
   fs::create_directories(dir);
   const std::vector<std::string> files = SaveKalibrFiles(rig, dir);
   const bool camera_only = rig.IsCameraOnly();
@@ -180,7 +183,9 @@ TEST(KalibrFiles, CameraOnlyRigWritesCamchainWithChainedPoses) {
 
 TEST(KalibrFiles, ReadsAKalibrWrittenImuInputFile) {
   // Kalibr's single-IMU input format: keys at the top level.
-  const std::string dir = (fs::path(::testing::TempDir()) / "ctcal_kalibr_input").string();
+  const std::string dir =
+      (fs::path(::testing::TempDir()) / ("ctcal_kalibr_input_" + std::to_string(getpid())))
+          .string();
   fs::create_directories(dir);
   std::ofstream(dir + "/imu.yaml") << R"(#Accelerometers
 accelerometer_noise_density: 1.86e-03   #Noise density (continuous-time)

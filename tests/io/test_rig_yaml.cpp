@@ -2,6 +2,7 @@
 // checks a rig must pass.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstring>
@@ -335,7 +336,8 @@ TEST(RigYaml, WriterRefusesAnInvalidRig) {
 
 TEST(RigYaml, SaveAndLoadThroughAFile) {
   const RigConfig rig = RandomResult(7);
-  const std::string path = ::testing::TempDir() + "/ctcal_rig_roundtrip.yaml";
+  const std::string path =
+      ::testing::TempDir() + "/ctcal_rig_roundtrip_" + std::to_string(getpid()) + ".yaml";
   SaveRig(rig, path);
   std::vector<std::string> warnings;
   EXPECT_TRUE(LoadRig(path, &warnings) == rig);
