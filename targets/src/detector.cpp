@@ -612,6 +612,10 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
     }
   }
   const int half_window = std::clamp(static_cast<int>(0.4 * min_step), 2, 12);
+  // findChessboardCornersSB's corners are already sub-pixel but its outer-row corners are off by
+  // up to ~1.5 px on real photos (opencv-doc's left*.jpg), which the refinement corrects; the
+  // next X-junction is a whole square away, so a fifth of a square is still the same corner.
+  const double max_jump = std::max(options_.max_refinement_jump_px, 0.2 * min_step);
   for (int id = 0; id < rows * cols; ++id) {
     DetectedCorner corner;
     corner.id = id;
@@ -620,8 +624,7 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
     if (options_.refine) {
       Eigen::Vector2d uv = corner.uv;
       double sigma = 0.0;
-      if (RefineCorner(gray, half_window, &uv, &sigma) &&
-          (uv - corner.uv).norm() <= options_.max_refinement_jump_px) {
+      if (RefineCorner(gray, half_window, &uv, &sigma) && (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
         corner.sigma = std::max(options_.min_sigma_px, sigma);
       } else {
