@@ -1,0 +1,163 @@
+// `ctcal detect --target TARGET.yaml --data DATA [--camera camN]` (SPEC section 8): detects the
+// board in every image of DATA/camN/data.csv and writes DATA/camN/corners.csv (SPEC section 6,
+// with the sigma column). Without --camera, every DATA/cam*/ folder with a data.csv.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/targets/detector.h"
+
+namespace ctcal::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Detects one camera's images; returns an exit code.
+int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::path& camera_dir) {
+  const std::string camera = camera_dir.filename().string();
+  std::vector<ImageEntry> images;
+  try {
+    images = ReadImageCsv((camera_dir / "data.csv").string(), /*check_images=*/true);
+  } catch (const std::exception& e) {
+    return cli.InputError(e.what());
+  }
+  if (images.empty())
+    return cli.InputError((camera_dir / "data.csv").string() + ": no images listed");
+  std::vector<std::string> paths;
+  paths.reserve(images.size());
+  for (const ImageEntry& image : images)
+    paths.push_back((camera_dir / "data" / image.filename).string());
+
+  const bool tty = isatty(fileno(stderr));
+  const std::vector<DetectionResult> results =
+      detector.DetectFiles(paths, [&](size_t done, size_t total) {
+        if (tty && (done % 10 == 0 || done == total)) {
+          std::fprintf(stderr, "\r%s: %zu/%zu images", camera.c_str(), done, total);
+          if (done == total)
+            std::fprintf(stderr, "\n");
+        }
+      });
+
+  std::vector<CornerObservation> corners;
+  size_t with_board = 0, unreadable = 0, total_corners = 0;
+  std::map<RejectReason, size_t> rejected;
+  std::string first_error;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const DetectionResult& r = results[i];
+    if (!r.error.empty()) {
+      ++unreadable;
+      if (first_error.empty())
+        first_error = r.error;
+      continue;
+    }
+    for (const TagRejection& rejection : r.rejected)
+      ++rejected[rejection.reason];
+    if (!r.board_found)
+      continue;
+    ++with_board;
+    total_corners += r.corners.size();
+    for (const DetectedCorner& c : r.corners) {
+      CornerObservation o;
+      o.t_ns = images[i].t_ns;
+      o.corner_id = c.id;
+      o.u = c.uv.x();
+      o.v = c.uv.y();
+      o.sigma = c.sigma;
+      corners.push_back(o);
+    }
+  }
+  if (unreadable == results.size())
+    return cli.InputError("no image of " + camera + " could be read (" + first_error + ")");
+
+  std::printf("%s: %zu images, %zu with the board, %.1f corners per image with the board",
+              camera.c_str(), results.size(), with_board,
+              with_board > 0 ? static_cast<double>(total_corners) / with_board : 0.0);
+  if (unreadable > 0)
+    std::printf(", %zu unreadable (first: %s)", unreadable, first_error.c_str());
+  std::printf("\n");
+  const bool tags = detector.board().type() == TargetType::kAprilGrid;
+  for (const auto& [reason, count] : rejected) {
+    std::printf("  rejected: %zu %s (%s)\n", count,
+                reason == RejectReason::kTooFewTags ? "views" : (tags ? "tags" : "corners"),
+                ToString(reason));
+  }
+  if (with_board == 0) {
+    std::string hint = "check the target file";
+    if (rejected.count(RejectReason::kUnknownId))
+      hint = "tag ids beyond this board were seen: a larger board, or the wrong target file?";
+    else if (rejected.count(RejectReason::kBadBorder))
+      hint = "tags with another border width were seen: check blackTagBorder";
+    return cli.RunFailed("no board found in any image of " + camera + " (" + hint + ")");
+  }
+  const std::string out = (camera_dir / "corners.csv").string();
+  try {
+    WriteCornersCsv(out, corners);
+  } catch (const std::exception& e) {
+    return cli.RunFailed(e.what());
+  }
+  std::printf("  wrote %s (%zu corners)\n", out.c_str(), corners.size());
+  return kExitOk;
+}
+
+}  // namespace
+
+int RunDetect(int argc, char** argv) {
+  namespace po = boost::program_options;
+  CommandLine cli("detect", "--target TARGET.yaml --data DATA [--camera cam0]",
+                  "Detect the board in every image of DATA/<camera>/data.csv and write "
+                  "DATA/<camera>/corners.csv (timestamp,corner_id,u,v,sigma).");
+  std::string target_path, data_dir, camera;
+  int threads = 0;
+  cli.options().add_options()("target", po::value(&target_path)->required(),
+                              "Kalibr target file (aprilgrid or checkerboard)")(
+      "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
+      "camera", po::value(&camera),
+      "camera folder name (default: every DATA/cam* folder with a data.csv)")(
+      "threads", po::value(&threads)->default_value(0),
+      "images detected in parallel (0: one per hardware thread)");
+  if (const auto exit_code = cli.Parse(argc, argv))
+    return *exit_code;
+
+  std::unique_ptr<Detector> detector;
+  try {
+    DetectorOptions options;
+    options.threads = threads;
+    detector = std::make_unique<Detector>(Board(LoadTargetConfig(target_path)), options);
+  } catch (const std::exception& e) {
+    return cli.InputError(e.what());
+  }
+  if (!fs::is_directory(data_dir))
+    return cli.InputError(data_dir + ": no such dataset folder");
+  std::vector<fs::path> cameras;
+  if (!camera.empty()) {
+    if (!fs::exists(fs::path(data_dir) / camera / "data.csv"))
+      return cli.InputError((fs::path(data_dir) / camera / "data.csv").string() + ": not found");
+    cameras.push_back(fs::path(data_dir) / camera);
+  } else {
+    for (const fs::directory_entry& entry : fs::directory_iterator(data_dir)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_directory() && name.rfind("cam", 0) == 0 &&
+          fs::exists(entry.path() / "data.csv"))
+        cameras.push_back(entry.path());
+    }
+    std::sort(cameras.begin(), cameras.end());
+    if (cameras.empty())
+      return cli.InputError(data_dir + ": no cam*/data.csv to detect (use --camera NAME)");
+  }
+  for (const fs::path& camera_dir : cameras) {
+    if (const int code = DetectCamera(cli, *detector, camera_dir); code != kExitOk)
+      return code;
+  }
+  return kExitOk;
+}
+
+}  // namespace ctcal::app
