@@ -15,6 +15,7 @@
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/sim/dataset_writer.h"
 #include "ctcal/sim/default_rig.h"
+#include "ctcal/sim/image_writer.h"
 #include "ctcal/sim/perturb.h"
 #include "ctcal/sim/scenario.h"
 #include "ctcal/sim/simulator.h"
@@ -72,7 +73,9 @@ int RunSimulate(int argc, char** argv) {
        "coarse (identity intrinsics, 5 deg / 2 cm extrinsics)")                       //
       ("dropout", po::value(&dropout)->default_value(0.0),                            //
        "probability that a visible corner is not detected")                           //
-      ("images", po::bool_switch(), "render board images instead of writing corners");
+      ("images", po::bool_switch(),
+       "render board images (DATA/camN/data/*.png) and write the noise-free corners to "
+       "corners_true.csv instead of corners.csv, so that the calibrator detects");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
 
@@ -89,10 +92,7 @@ int RunSimulate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.UsageError(e.what());
   }
-  if (cli.vm()["images"].as<bool>())
-    return cli.UsageError(
-        "--images: board rendering is not available in this build yet (write corners instead: "
-        "drop --images)");
+  const bool images = cli.vm()["images"].as<bool>();
 
   RigConfig rig;
   try {
@@ -125,7 +125,20 @@ int RunSimulate(int argc, char** argv) {
     sim::Random perturb_rng = sim::Random(seed).Fork(kPerturbationStream);
     const RigConfig guess = sim::PerturbRig(rig, perturbation, perturb_rng);
 
-    sim::WriteDataset(data, guess, out);
+    sim::WriteOptions write_options;
+    write_options.corners_true_only = images;
+    sim::WriteDataset(data, guess, out, write_options);
+    if (images) {
+      std::size_t last_decile = 0;
+      sim::RenderImages(data, traj, out, seed, [&](std::size_t done, std::size_t total) {
+        const std::size_t decile = 10 * done / total;
+        if (decile != last_decile) {
+          std::printf("  [%3zu%%] rendered %zu of %zu images\n", 10 * decile, done, total);
+          std::fflush(stdout);
+          last_decile = decile;
+        }
+      });
+    }
     for (const sim::InertialData& d : data.inertial)
       std::printf("  %-8s %zu samples\n", d.sensor.c_str(), d.samples.size());
     for (const sim::CameraData& d : data.cameras) {

@@ -128,6 +128,20 @@ TEST_F(SimulateCli, SimulatesAUserRig) {
   EXPECT_EQ(LoadRig(Dir("e") + "/truth.yaml").Find("cam0")->line_delay, 2e-5);
 }
 
+TEST_F(SimulateCli, ImagesReplaceTheCornersByRenderedFrames) {
+  const Result r = RunCtcal("--scenario full --seed 3 --duration 0.2 --images --out " + Dir("i"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string cam : {"cam0", "cam1"}) {
+    EXPECT_FALSE(fs::exists(Dir("i") + "/" + cam + "/corners.csv"));
+    const auto truth = ReadCornersCsv(Dir("i") + "/" + cam + "/corners_true.csv", 144);
+    EXPECT_GT(truth.size(), 100u);
+    EXPECT_FALSE(truth.front().sigma.has_value());
+    // data.csv lists every rendered image, and each exists.
+    const auto images = ReadImageCsv(Dir("i") + "/" + cam + "/data.csv", /*check_images=*/true);
+    EXPECT_GE(images.size(), 4u);
+  }
+}
+
 TEST_F(SimulateCli, BadOptionsGiveOneClearLine) {
   fs::create_directories(root_);
   std::ofstream(Dir("file")) << "x";

@@ -26,6 +26,8 @@ class Random {
   double Gaussian();
   double Gaussian(double sigma) { return sigma * Gaussian(); }
   Eigen::Vector3d Gaussian3(double sigma);
+  // 64 raw random bits (e.g. a seed for another generator).
+  std::uint64_t Bits() { return engine_(); }
   // True with probability p.
   bool Bernoulli(double p) { return Uniform() < p; }
 
