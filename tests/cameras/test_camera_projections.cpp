@@ -312,6 +312,13 @@ TYPED_TEST(CameraProjectionTest, InvalidPointsRejected) {
     EXPECT_FALSE(Model::Project(c.params.data(), Eigen::Vector3d(0, 0, 0), &uv));
     EXPECT_FALSE(Model::Project(c.params.data(), Eigen::Vector3d(0, 0, -1), &uv));
     EXPECT_FALSE(Model::Project(c.params.data(), Eigen::Vector3d(1e-12, 0, -3), &uv));
+    // Non-finite input is rejected, never propagated.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_FALSE(Model::Project(c.params.data(), Eigen::Vector3d(nan, 0, 1), &uv));
+    EXPECT_FALSE(Model::Project(c.params.data(), Eigen::Vector3d(0, 0, nan), &uv));
+    Eigen::Vector3d ray;
+    EXPECT_FALSE(Model::Unproject(c.params.data(), Eigen::Vector2d(nan, 10), &ray));
+    EXPECT_FALSE(Model::Unproject(c.params.data(), Eigen::Vector2d(10, nan), &ray));
     if (std::isnan(c.boundary_angle))
       continue;
     for (double az : {0.0, 1.0, 2.5, -2.0}) {

@@ -41,6 +41,15 @@ inline void FreeBounds(int n, double* lower, double* upper) {
   }
 }
 
+// Whether every coordinate of a point is finite; written with comparisons so that it works on the
+// value of a ceres::Jet as well. Every Project starts with it: a NaN or infinite point is invalid,
+// whatever the formula would make of it.
+template <typename T>
+bool IsFinitePoint(const Eigen::Matrix<T, 3, 1>& p) {
+  const T inf(std::numeric_limits<double>::infinity());
+  return p(0) > -inf && p(0) < inf && p(1) > -inf && p(1) < inf && p(2) > -inf && p(2) < inf;
+}
+
 // Closed-form and iterative unprojections alike end with this check: the ray must project back
 // (validly) onto the pixel it came from. It catches a ray on the wrong branch of a model (e.g. the
 // second intersection of omni's sphere for xi > 1) and any iteration that stopped early. The

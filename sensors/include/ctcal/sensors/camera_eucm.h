@@ -59,6 +59,8 @@ struct EucmModel {
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,
                       JacobianPtr<T, 2, kNumParams> J_uv_params = nullptr) {
+    if (!IsFinitePoint(p_C))
+      return false;
     using std::sqrt;
     const T& alpha = params[0];
     const T& beta = params[1];

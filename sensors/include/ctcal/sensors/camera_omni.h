@@ -60,6 +60,8 @@ struct OmniModel {
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,
                       JacobianPtr<T, 2, kNumParams> J_uv_params = nullptr) {
+    if (!IsFinitePoint(p_C))
+      return false;
     using std::sqrt;
     const T& xi = params[0];
     const T& fu = params[1];

@@ -72,6 +72,8 @@ struct PinholeModel {
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,
                       JacobianPtr<T, 2, kNumParams> J_uv_params = nullptr) {
+    if (!IsFinitePoint(p_C))
+      return false;
     const T& fu = params[0];
     const T& fv = params[1];
     const T& pu = params[2];
@@ -164,6 +166,8 @@ struct PinholeEquidistantModel {
   static bool Project(const T* params, const Eigen::Matrix<T, 3, 1>& p_C,
                       Eigen::Matrix<T, 2, 1>* uv, JacobianPtr<T, 2, 3> J_uv_p = nullptr,
                       JacobianPtr<T, 2, kNumParams> J_uv_params = nullptr) {
+    if (!IsFinitePoint(p_C))
+      return false;
     using std::atan2;
     using std::sqrt;
     const T& fu = params[0];
