@@ -764,6 +764,8 @@ void ValidateRig(const RigConfig& rig, const std::string& context) {
                          "' is a gyro; a rig without an imu is a camera calibration whose base "
                          "is the reference camera");
   }
+  if (camera_only && (rig.gravity_W || rig.sigma_gravity_W))
+    fail("gravity_W", "a rig without IMUs has no gravity (SPEC section 7)");
   std::set<std::string> names;
   for (const SensorConfig& s : rig.sensors) {
     const std::string where = Where(s.name);
