@@ -3,6 +3,7 @@
 // line. Progress goes to stdout, one error line to stderr.
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -56,15 +57,15 @@ int RunSimulate(int argc, char** argv) {
                   "trajectory and write the dataset (SPEC section 6), its ground truth "
                   "(truth.yaml, groundtruth/, biases.csv) and an initial-guess rig.yaml.");
   std::string scenario_name, out, rig_path, perturb_name;
-  std::uint64_t seed = 0;
+  std::string seed_text;
   double duration = sim::kDefaultDurationS;
   double dropout = 0.0;
-  cli.options().add_options()                                                        //
-      ("scenario", po::value(&scenario_name)->required(), ScenarioList().c_str())    //
-      ("seed", po::value(&seed)->required(), "random seed (same seed, same files)")  //
-      ("out", po::value(&out)->required(), "dataset folder to write")                //
-      ("duration", po::value(&duration)->default_value(sim::kDefaultDurationS),      //
-       "seconds of base IMU data")                                                   //
+  cli.options().add_options()                                                             //
+      ("scenario", po::value(&scenario_name)->required(), ScenarioList().c_str())         //
+      ("seed", po::value(&seed_text)->required(), "random seed (same seed, same files)")  //
+      ("out", po::value(&out)->required(), "dataset folder to write")                     //
+      ("duration", po::value(&duration)->default_value(sim::kDefaultDurationS),           //
+       "seconds of base IMU data")                                                        //
       ("rig", po::value(&rig_path),
        "simulate this rig (its values are the truth) "                                //
        "instead of the default MVIS Table 4 rig")                                     //
@@ -79,6 +80,12 @@ int RunSimulate(int argc, char** argv) {
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
 
+  // Parsed here: Boost would wrap "-1" around to 2^64 - 1.
+  std::uint64_t seed = 0;
+  const char* seed_end = seed_text.data() + seed_text.size();
+  const auto parsed = std::from_chars(seed_text.data(), seed_end, seed);
+  if (seed_text.empty() || parsed.ec != std::errc() || parsed.ptr != seed_end)
+    return cli.UsageError("--seed must be an integer in [0, 2^64), got '" + seed_text + "'");
   if (!(duration > 0.0) || !std::isfinite(duration) || duration > 24 * 3600.0)
     return cli.UsageError("--duration must be a positive number of seconds (at most a day), got " +
                           std::to_string(duration));

@@ -157,6 +157,7 @@ TEST_F(SimulateCli, BadOptionsGiveOneClearLine) {
       {"--scenario full --seed 1 --rig " + Dir("missing.yaml") + " --out " + Dir("x"),
        "missing.yaml"},
       {"--scenario full --out " + Dir("x"), "seed"},
+      {"--scenario full --seed -1 --out " + Dir("x"), "--seed must be an integer"},
   };
   for (const auto& c : cases) {
     const Result r = RunCtcal(c.args);
