@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <stdexcept>
@@ -16,6 +17,10 @@
 namespace ctcal {
 
 using internal::YamlIn;
+
+// Line of `key` under `where` ("sensors.cam0", "base_imu", ...) in the file a rig came from; 0
+// when unknown.
+using LineOf = std::function<int(const std::string& where, const std::string& key)>;
 
 int IntrinsicsCount(const std::string& camera_model) {
   if (camera_model == "pinhole")
@@ -71,6 +76,8 @@ int TgCount(const SensorConfig& s) {
 const char* StoredForm(int count) {
   return count == 9 ? "9 numbers, full row-major" : "6 numbers, upper-triangular column-wise";
 }
+
+void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineOf& line_of);
 
 // --- reading -----------------------------------------------------------------------------------
 
@@ -161,7 +168,16 @@ class RigReader {
     if (root["observability"])
       rig.observability = ReadObservability(root["observability"]);
 
-    ValidateRig(rig, in_.file());
+    ValidateRigAt(rig, in_.file(), [&root](const std::string& where, const std::string& key) {
+      YAML::Node node;
+      if (where.rfind("sensors.", 0) == 0) {
+        const YAML::Node sensor = root["sensors"][where.substr(8)];
+        node = !key.empty() && sensor[key] ? sensor[key] : sensor;
+      } else if (!where.empty()) {
+        node = root[where];
+      }
+      return node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
+    });
     return rig;
   }
 
@@ -746,9 +762,15 @@ void EmitObservability(YAML::Emitter& out, const Observability& o) {
 
 }  // namespace
 
-void ValidateRig(const RigConfig& rig, const std::string& context) {
-  auto fail = [&context](const std::string& where, const std::string& what) {
-    throw std::runtime_error(context + ": " + (where.empty() ? "" : where + ": ") + what);
+namespace {
+
+void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineOf& line_of) {
+  // `key` narrows the line to the key's own when the rig came from a file.
+  auto fail = [&context, &line_of](const std::string& where, const std::string& what,
+                                   const std::string& key = "") {
+    const int line = line_of ? line_of(where, key) : 0;
+    throw std::runtime_error(context + (line > 0 ? ":" + std::to_string(line) : "") + ": " +
+                             (where.empty() ? "" : where + ": ") + what);
   };
   const SensorConfig* base = rig.Find(rig.base_imu);
   if (!base)
@@ -796,35 +818,43 @@ void ValidateRig(const RigConfig& rig, const std::string& context) {
     const Eigen::Matrix3d R = s.T_B_S.topLeftCorner<3, 3>();
     if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0 ||
         s.T_B_S.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) {
-      fail(where, "T_B_S is not a rigid transform");
+      fail(where, "T_B_S is not a rigid transform", "T_B_S");
     }
     if (is_base && (s.T_B_S != Eigen::Matrix4d::Identity() || s.time_offset != 0.0))
       fail(where, "the base sensor has T_B_S = identity and time_offset = 0 by definition");
     // The estimate vocabulary against what the sensor has.
     if (is_base &&
         (s.Estimates(EstimateItem::kExtrinsics) || s.Estimates(EstimateItem::kTimeOffset))) {
-      fail(where, "estimate: the base sensor has no extrinsics or time_offset to estimate");
+      fail(where, "estimate: the base sensor has no extrinsics or time_offset to estimate",
+           "estimate");
     }
     if (s.Estimates(EstimateItem::kLineDelay) && s.type != SensorType::kCamera)
-      fail(where, "estimate: line_delay applies to cameras only");
+      fail(where, "estimate: line_delay applies to cameras only", "estimate");
     if (camera_only && s.Estimates(EstimateItem::kTimeOffset)) {
-      fail(where,
-           "estimate: a rig without IMUs pairs frames by stamp and estimates no time_offset");
+      fail(where, "estimate: a rig without IMUs pairs frames by stamp and estimates no time_offset",
+           "estimate");
     }
     if (s.Estimates(EstimateItem::kIntrinsics) && s.IsInertial() && DwCount(s) == 0) {
-      fail(where, "estimate: model none has no intrinsics to estimate");
+      fail(where, "estimate: model none has no intrinsics to estimate", "estimate");
     }
     if (s.type == SensorType::kGyro && s.gyro_model == GyroModel::kFull &&
         s.Estimates(EstimateItem::kIntrinsics) && s.Estimates(EstimateItem::kExtrinsics)) {
       fail(where,
            "estimate: a gyro with model full cannot estimate its rotation (extrinsics) together "
-           "with its intrinsics: the full Dw absorbs the rotation");
+           "with its intrinsics: the full Dw absorbs the rotation",
+           "estimate");
     }
   }
   for (const auto& [name, r] : rig.residuals) {
     if (!rig.Find(name))
       fail("residuals", "'" + name + "' names no sensor of the rig");
   }
+}
+
+}  // namespace
+
+void ValidateRig(const RigConfig& rig, const std::string& context) {
+  ValidateRigAt(rig, context, nullptr);
 }
 
 RigConfig ParseRig(const YAML::Node& root, const std::string& file,

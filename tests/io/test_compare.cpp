@@ -198,6 +198,12 @@ TEST(Compare, MissingSensorOrModelMismatchIsAnError) {
   result.Find("imu0")->T_g.clear();
   EXPECT_NO_THROW(CompareRigs(truth, result));
   EXPECT_THROW(CompareRigs(result, truth), std::runtime_error);  // truth lacks Tg
+  // imu1 estimates R_I_w, imu2 R_I_a: not the same parameter.
+  result = truth;
+  result.Find("imu0")->imu_model = ImuModel::kImu1;
+  result.Find("imu0")->R_I_w = result.Find("imu0")->R_I_a;
+  result.Find("imu0")->R_I_a.setIdentity();
+  EXPECT_THROW(CompareRigs(truth, result), std::runtime_error);
 }
 
 }  // namespace
