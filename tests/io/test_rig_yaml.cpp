@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <random>
 
@@ -167,6 +168,26 @@ TEST(RigYaml, ExampleRigRoundTripIsExact) {
   EXPECT_TRUE(again == rig);
   // Writing is deterministic: the second generation is the same text.
   EXPECT_EQ(EmitRig(again), text);
+}
+
+// Files written by other programs / by hand: every rig in configs/ and the shared EuRoC reference
+// (block style, some optional keys absent) read, and round-trip exactly.
+TEST(RigYaml, ConfigsAndSharedReferenceReadAndRoundTrip) {
+  std::vector<std::string> paths;
+  for (const auto& e :
+       std::filesystem::directory_iterator(std::string(CTCAL_SOURCE_DIR) + "/configs")) {
+    if (e.path().extension() == ".yaml")
+      paths.push_back(e.path().string());
+  }
+  const std::string shared = std::string(CTCAL_SHARED_DATA_DIR) + "/euroc_cam_april/reference.yaml";
+  if (std::filesystem::is_regular_file(shared))
+    paths.push_back(shared);
+  ASSERT_FALSE(paths.empty());
+  for (const std::string& path : paths) {
+    std::vector<std::string> warnings;
+    const RigConfig rig = LoadRig(path, &warnings);
+    EXPECT_TRUE(ParseRigString(EmitRig(rig), "emitted", &warnings) == rig) << path;
+  }
 }
 
 TEST(RigYaml, RandomResultRoundTripIsExact) {
