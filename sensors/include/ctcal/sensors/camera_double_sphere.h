@@ -41,8 +41,8 @@ struct DoubleSphereModel {
       return false;
     if (!(params[0] >= -1.0 && params[0] <= 1.0) || !(params[1] >= 0.0 && params[1] <= 1.0)) {
       if (why)
-        *why = "ds needs xi in [-1, 1] and alpha in [0, 1], got xi " + std::to_string(params[0]) +
-               ", alpha " + std::to_string(params[1]);
+        *why = "ds needs xi in [-1, 1] and alpha in [0, 1], got xi " +
+               camera_internal::Num(params[0]) + ", alpha " + camera_internal::Num(params[1]);
       return false;
     }
     return true;

@@ -40,8 +40,8 @@ struct EucmModel {
       return false;
     if (!(params[0] >= 0.0 && params[0] <= 1.0) || !(params[1] > 0.0)) {
       if (why)
-        *why = "eucm needs alpha in [0, 1] and beta > 0, got alpha " + std::to_string(params[0]) +
-               ", beta " + std::to_string(params[1]);
+        *why = "eucm needs alpha in [0, 1] and beta > 0, got alpha " +
+               camera_internal::Num(params[0]) + ", beta " + camera_internal::Num(params[1]);
       return false;
     }
     return true;

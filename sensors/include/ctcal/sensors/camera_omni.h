@@ -45,7 +45,7 @@ struct OmniModel {
       return false;
     if (params[0] < 0.0) {
       if (why)
-        *why = "omni xi must be >= 0, got " + std::to_string(params[0]);
+        *why = "omni xi must be >= 0, got " + camera_internal::Num(params[0]);
       return false;
     }
     return true;

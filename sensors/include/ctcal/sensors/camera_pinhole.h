@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "ctcal/sensors/camera_common.h"
@@ -17,13 +18,19 @@ namespace camera_internal {
 
 inline constexpr double kPi = 3.14159265358979323846;
 
+// A parameter value in an error message, as short as "%g" makes it.
+inline std::string Num(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", x);
+  return buf;
+}
+
 // Focal lengths must be positive and finite (shared by every model's CheckParams).
 inline bool CheckFocal(double fu, double fv, std::string* why) {
   if (fu > 0.0 && fv > 0.0 && std::isfinite(fu) && std::isfinite(fv))
     return true;
   if (why)
-    *why = "focal lengths fu, fv must be positive, got " + std::to_string(fu) + ", " +
-           std::to_string(fv);
+    *why = "focal lengths fu, fv must be positive, got " + Num(fu) + ", " + Num(fv);
   return false;
 }
 
