@@ -35,7 +35,8 @@ void PrintUsage(std::FILE* out) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    PrintUsage(stderr);
+    // Bad usage is one line on stderr, like every subcommand's (apps/cli_common.h).
+    std::fprintf(stderr, "ctcal: error: no command given (ctcal --help lists them)\n");
     return 2;
   }
   const std::string cmd = argv[1];

@@ -95,7 +95,9 @@ TEST_F(Cli, BadUsageExitsTwoWithOneLineOnStderr) {
   const Result unknown = RunCtcal("calibrat");
   EXPECT_EQ(unknown.code, 2);
   EXPECT_EQ(Lines(unknown.err), 1) << unknown.err;
-  EXPECT_EQ(RunCtcal("").code, 2);
+  const Result none = RunCtcal("");
+  EXPECT_EQ(none.code, 2);
+  EXPECT_EQ(Lines(none.err), 1) << none.err;
 }
 
 TEST_F(Cli, CompareReportsAMissingOrBadFileInOneLine) {
