@@ -441,5 +441,42 @@ TEST(CameraModelIdentities, SpecialCasesCoincide) {
   }
 }
 
+// The models' closed forms against the geometric constructions they come from (Usenko et al.,
+// section 3), written step by step: onto a unit sphere (omni, ds) or the ellipsoid
+// beta (x^2 + y^2) + z^2 = 1 (eucm), for ds onto a second unit sphere shifted by xi, then a pinhole
+// whose centre sits alpha / (1 - alpha) (omni: xi) behind the last surface's centre, with focal
+// length f / (1 - alpha) in the alpha form.
+TEST(CameraModelIdentities, GeometricConstructions) {
+  const auto pinhole_from = [](const Eigen::Vector3d& s, double shift, double fu, double fv,
+                               double pu, double pv) {
+    return Eigen::Vector2d(fu * s.x() / (s.z() + shift) + pu, fv * s.y() / (s.z() + shift) + pv);
+  };
+  const double omni[] = {0.8, 350, 352, 320, 240};
+  const double ds[] = {-0.18, 0.59, 158.28, 158.27, 254.93, 256.89};
+  const double eucm[] = {0.59, 1.13, 460.76, 459.41, 365.89, 249.33};
+  for (const Eigen::Vector3d& p : RandomPoints(100 * kDeg, 200, 21)) {
+    Eigen::Vector2d uv;
+    ASSERT_TRUE(OmniNoneModel::Project(omni, p, &uv));
+    EXPECT_LT(
+        (uv - pinhole_from(p.normalized(), omni[0], omni[1], omni[2], omni[3], omni[4])).norm(),
+        1e-9);
+
+    const double xi = ds[0], a = ds[1];
+    const Eigen::Vector3d s2 = (p.normalized() + Eigen::Vector3d(0, 0, xi)).normalized();
+    ASSERT_TRUE(DoubleSphereModel::Project(ds, p, &uv));
+    EXPECT_LT(
+        (uv - pinhole_from(s2, a / (1 - a), ds[2] / (1 - a), ds[3] / (1 - a), ds[4], ds[5])).norm(),
+        1e-9);
+
+    const double alpha = eucm[0], beta = eucm[1];
+    const Eigen::Vector3d e = p / std::sqrt(beta * (p.x() * p.x() + p.y() * p.y()) + p.z() * p.z());
+    ASSERT_TRUE(EucmModel::Project(eucm, p, &uv));
+    EXPECT_LT((uv - pinhole_from(e, alpha / (1 - alpha), eucm[2] / (1 - alpha),
+                                 eucm[3] / (1 - alpha), eucm[4], eucm[5]))
+                  .norm(),
+              1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace ctcal
