@@ -11,10 +11,7 @@ Vector3d GyroRawFromTrue(GyroModel m, const double* Dw, const Vector3d& w_G, con
                          const GyroJacobians& J) {
   const MatrixForm f = GyroDwForm(m);
   const Matrix3d D_w = MatrixFromStored<double>(f, Dw, Matrix3d::Identity());
-  const Matrix3d T_w =
-      f == MatrixForm::kUpper
-          ? Matrix3d(D_w.triangularView<Eigen::Upper>().solve(Matrix3d::Identity()))
-          : Matrix3d(D_w.inverse());
+  const Matrix3d T_w = ScaleMatrixInverse(f, D_w);
   const Vector3d v = T_w * w_G;
   if (J.J_out_Dw) {
     J.J_out_Dw->setZero(3, StoredSize(f));

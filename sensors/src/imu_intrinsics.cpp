@@ -22,14 +22,6 @@ Matrix3d RotationOf(const ImuModelLayout& L, ImuRotation wanted, const ImuBlocks
   return imu_detail::RotationOf<double>(L.rotation, wanted, p.q_rotation);
 }
 
-Matrix3d InverseOf(MatrixForm f, const Matrix3d& D) {
-  if (f == MatrixForm::kAbsent)
-    return Matrix3d::Identity();
-  if (f == MatrixForm::kUpper)
-    return D.triangularView<Eigen::Upper>().solve(Matrix3d::Identity());
-  return D.inverse();
-}
-
 }  // namespace
 
 ImuModelLayout ImuModelLayout::Of(ImuModel model, GSensitivity g_sensitivity) {
@@ -71,8 +63,10 @@ void ImuRawFromTrue(const ImuModelLayout& L, const ImuBlocks<double>& p, const V
                     Vector3d* a_m, const ImuJacobians& J) {
   const Matrix3d R_w_I = RotationOf(L, ImuRotation::kR_I_w, p).transpose();
   const Matrix3d R_a_I = RotationOf(L, ImuRotation::kR_I_a, p).transpose();
-  const Matrix3d T_w = InverseOf(L.Dw, MatrixFromStored<double>(L.Dw, p.Dw, Matrix3d::Identity()));
-  const Matrix3d T_a = InverseOf(L.Da, MatrixFromStored<double>(L.Da, p.Da, Matrix3d::Identity()));
+  const Matrix3d T_w =
+      ScaleMatrixInverse(L.Dw, MatrixFromStored<double>(L.Dw, p.Dw, Matrix3d::Identity()));
+  const Matrix3d T_a =
+      ScaleMatrixInverse(L.Da, MatrixFromStored<double>(L.Da, p.Da, Matrix3d::Identity()));
   const Matrix3d T_g = MatrixFromStored<double>(L.Tg, p.Tg, Matrix3d::Zero());
   const Vector3d v_w = T_w * (R_w_I * w_I);
   const Vector3d v_a = T_a * (R_a_I * a_I);

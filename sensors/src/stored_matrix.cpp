@@ -32,6 +32,24 @@ std::vector<double> StoredFromMatrix(MatrixForm f, const Eigen::Matrix3d& M) {
   return v;
 }
 
+Eigen::Matrix3d ScaleMatrixInverse(MatrixForm f, const Eigen::Matrix3d& D) {
+  if (f == MatrixForm::kAbsent)
+    return Eigen::Matrix3d::Identity();
+  if (f == MatrixForm::kUpper) {
+    // Back substitution written out: the inverse of an upper triangle is an upper triangle.
+    const double i11 = 1.0 / D(0, 0), i22 = 1.0 / D(1, 1), i33 = 1.0 / D(2, 2);
+    Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+    T(0, 0) = i11;
+    T(1, 1) = i22;
+    T(2, 2) = i33;
+    T(0, 1) = -D(0, 1) * i11 * i22;
+    T(1, 2) = -D(1, 2) * i22 * i33;
+    T(0, 2) = (D(0, 1) * D(1, 2) - D(0, 2) * D(1, 1)) * i11 * i22 * i33;
+    return T;
+  }
+  return D.inverse();
+}
+
 bool IsRepresentable(MatrixForm f, const Eigen::Matrix3d& M, const Eigen::Matrix3d& absent) {
   switch (f) {
     case MatrixForm::kAbsent:

@@ -75,3 +75,23 @@ TEST(StoredMatrix, CheckedRotationReturnsTheSameRotation) {
 
 }  // namespace
 }  // namespace ctcal
+
+namespace ctcal {
+namespace {
+
+TEST(StoredMatrix, ScaleMatrixInverseIsTheInverse) {
+  Eigen::Matrix3d D;
+  D << 1.02, -0.03, 0.05, 0.0, 0.97, 0.011, 0.0, 0.0, 1.004;
+  const Eigen::Matrix3d T = ScaleMatrixInverse(MatrixForm::kUpper, D);
+  EXPECT_LT((T * D - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_TRUE(Eigen::Matrix3d(T.triangularView<Eigen::StrictlyLower>()).isZero(0.0));
+  D(2, 0) = 0.02;
+  EXPECT_LT((ScaleMatrixInverse(MatrixForm::kFull, D) * D - Eigen::Matrix3d::Identity())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-15);
+  EXPECT_EQ(ScaleMatrixInverse(MatrixForm::kAbsent, D), Eigen::Matrix3d::Identity());
+}
+
+}  // namespace
+}  // namespace ctcal

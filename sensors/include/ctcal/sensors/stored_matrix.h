@@ -48,6 +48,10 @@ Mat3T<T> MatrixFromStored(MatrixForm f, const T* p, const Mat3T<T>& absent) {
 void StoreMatrix(MatrixForm f, const Eigen::Matrix3d& M, double* p);
 std::vector<double> StoredFromMatrix(MatrixForm f, const Eigen::Matrix3d& M);
 
+// D^-1 of a scale matrix in form f (the identity for kAbsent); an upper triangle is inverted in
+// closed form (its inverse is again an upper triangle).
+Eigen::Matrix3d ScaleMatrixInverse(MatrixForm f, const Eigen::Matrix3d& D);
+
 // True when M has exactly the zero pattern f demands (absent: M equals `absent` exactly).
 bool IsRepresentable(MatrixForm f, const Eigen::Matrix3d& M, const Eigen::Matrix3d& absent);
 
