@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -50,6 +51,20 @@ const std::set<std::string> kGyroNoiseKeys = {"gyroscope_noise_density", "gyrosc
 
 std::string Where(const std::string& sensor) {
   return "sensors." + sensor;
+}
+
+// A sensor name is a dataset folder (SPEC section 6) and the prefix of parameter names
+// (`cam0.intrinsics[2]`), so it keeps to characters that are safe in both.
+constexpr char kNameRule[] = "use letters, digits, '_' and '-' (it names a folder and parameters)";
+
+bool ValidSensorName(const std::string& name) {
+  if (name.empty())
+    return false;
+  for (const char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-')
+      return false;
+  }
+  return true;
 }
 
 int DwCount(const SensorConfig& s) {
@@ -119,8 +134,10 @@ class RigReader {
     bool has_imu = false;
     for (const auto& kv : sensors) {
       const std::string name = in_.String(kv.first, "sensors");
-      if (name.empty() || name == "groundtruth")
-        in_.Fail(kv.first, "sensors", "'" + name + "' cannot name a sensor (reserved)");
+      if (name == "groundtruth")
+        in_.Fail(kv.first, "sensors", "'groundtruth' cannot name a sensor (reserved)");
+      if (!ValidSensorName(name))
+        in_.Fail(kv.first, "sensors", "'" + name + "' cannot name a sensor: " + kNameRule);
       if (!names.insert(name).second)
         in_.Fail(kv.first, "sensors", "sensor '" + name + "' is given twice");
       in_.RequireMap(kv.second, Where(name));
@@ -793,6 +810,8 @@ void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineO
     const std::string where = Where(s.name);
     if (!names.insert(s.name).second)
       fail(where, "sensor name given twice");
+    if (!ValidSensorName(s.name) || s.name == "groundtruth")
+      fail(where, "not a valid sensor name: " + std::string(kNameRule));
     if (camera_only && s.type == SensorType::kGyro)
       fail(where, "a gyroscope needs an imu as the base (this rig has none)");
     const bool is_base = s.name == rig.base_imu;

@@ -7,13 +7,24 @@
 #include <vector>
 
 #include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/targets/target_config.h"
 
 namespace ctcal {
 namespace {
 
-enum class Reader { kRig, kTarget, kImu, kGyro, kImages, kCorners, kGroundTruth };
+enum class Reader {
+  kRig,
+  kTarget,
+  kImu,
+  kGyro,
+  kImages,
+  kCorners,
+  kGroundTruth,
+  kKalibrImu,
+  kKalibrCamchain
+};
 
 struct BadFile {
   const char* file;
@@ -151,6 +162,16 @@ const std::vector<BadFile>& Corpus() {
        Reader::kCorners,
        {"corners_sigma_column_missing.csv:3:", "expected 5 columns", "got 4"}},
       {"cam_empty_filename.csv", Reader::kImages, {"cam_empty_filename.csv:3:", "empty filename"}},
+      {"rig_bad_sensor_name.yaml",
+       Reader::kRig,
+       {"rig_bad_sensor_name.yaml:9:", "'cam 0.left' cannot name a sensor"}},
+      {"kalibr_imu_unknown_model.yaml",
+       Reader::kKalibrImu,
+       {"kalibr_imu_unknown_model.yaml:11:", "imu0",
+        "'scale-misalignment-size-effect' is not supported"}},
+      {"kalibr_camchain_missing_chain.yaml",
+       Reader::kKalibrCamchain,
+       {"kalibr_camchain_missing_chain.yaml:10:", "cam1", "missing required key 'T_cn_cnm1'"}},
       {"groundtruth_quaternion.csv",
        Reader::kGroundTruth,
        {"groundtruth_quaternion.csv:3:", "not a unit quaternion"}},
@@ -181,6 +202,12 @@ void Read(Reader reader, const std::string& path) {
       break;
     case Reader::kGroundTruth:
       ReadGroundTruthCsv(path);
+      break;
+    case Reader::kKalibrImu:  // the IMU file is read first: the camchain is not reached
+      RigFromKalibr(path + ".camchain-not-read.yaml", path, TargetConfig{});
+      break;
+    case Reader::kKalibrCamchain:  // camera-only
+      RigFromKalibr(path, "", TargetConfig{});
       break;
   }
 }
