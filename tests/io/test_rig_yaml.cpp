@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 
+#include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig_yaml.h"
 
 namespace ctcal {
@@ -156,6 +157,28 @@ RigConfig RandomResult(std::uint64_t seed) {
   o.predicted_unobservable = {"cam0.t_B_S[2]"};
   rig.observability = o;
   return rig;
+}
+
+TEST(NumberFormat, ShortestExactWithADotAndYamlNonFinites) {
+  EXPECT_EQ(FormatDouble(9.81), "9.81");
+  EXPECT_EQ(FormatDouble(1.0), "1.0");
+  EXPECT_EQ(FormatDouble(2e-05), "2.0e-05");
+  EXPECT_EQ(FormatDouble(-0.0), "-0.0");
+  EXPECT_EQ(FormatDouble(std::numeric_limits<double>::infinity()), ".inf");
+  EXPECT_EQ(FormatDouble(-std::numeric_limits<double>::infinity()), "-.inf");
+  EXPECT_EQ(FormatDouble(std::numeric_limits<double>::quiet_NaN()), ".nan");
+  for (const double x : {5e-324, std::numeric_limits<double>::min() / 3.0,
+                         std::numeric_limits<double>::max(), -1.0 / 3.0, 0.1, -0.0, 1e300}) {
+    double y = 0.0;
+    ASSERT_TRUE(ParseDouble(FormatDouble(x), &y)) << FormatDouble(x);
+    EXPECT_EQ(std::memcmp(&x, &y, sizeof(double)), 0) << FormatDouble(x);
+  }
+  double y = 0.0;
+  EXPECT_TRUE(ParseDouble(".Inf", &y) && std::isinf(y) && y > 0);
+  EXPECT_TRUE(ParseDouble("-.INF", &y) && std::isinf(y) && y < 0);
+  EXPECT_TRUE(ParseDouble("+1.5e3", &y) && y == 1500.0);
+  for (const char* bad : {"", "1.2.3", "1e", "abc", "1,5", " 1", "1e999"})
+    EXPECT_FALSE(ParseDouble(bad, &y)) << bad;
 }
 
 TEST(RigYaml, ExampleRigRoundTripIsExact) {
