@@ -177,6 +177,8 @@ struct Detector::Pool {
 
 namespace {
 
+constexpr int kMinImageSide = 16;
+
 apriltag_detector_t* NewApriltagDetector(apriltag_family_t* family, float quad_decimate) {
   apriltag_detector_t* detector = apriltag_detector_create();
   // Up to 2 corrected bits: tag36h11's minimum distance of 11 keeps false positives negligible.
@@ -435,6 +437,8 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
   if (black_border != 1 && black_border != 2)
     throw std::invalid_argument("black_border must be 1 or 2");
   const cv::Mat gray = ToGray8(image);
+  if (gray.cols < kMinImageSide || gray.rows < kMinImageSide)
+    return {};
   internal::TagFamilyPtr family = internal::CreateTag36h11(black_border);
   apriltag_detector_t* detector = NewApriltagDetector(family.get(), quad_decimate);
   std::vector<TagDetection> tags = RunApriltag(detector, gray);
@@ -458,7 +462,10 @@ std::unique_ptr<Detector::TagContext> Detector::AcquireTagContext() const {
   }
   auto context = std::make_unique<TagContext>();
   context->family = internal::CreateTag36h11(board_.config().black_tag_border);
-  context->detector = NewApriltagDetector(context->family.get(), options_.quad_decimate);
+  float decimate = options_.quad_decimate;
+  if (decimate <= 0.0f)
+    decimate = board_.config().black_tag_border >= 2 ? 2.0f : 1.0f;
+  context->detector = NewApriltagDetector(context->family.get(), decimate);
   return context;
 }
 
@@ -478,6 +485,9 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   }
   if (!gray.isContinuous())
     gray = gray.clone();
+  // No board fits in fewer pixels (and libapriltag's decimation needs a few to work on).
+  if (gray.cols < kMinImageSide || gray.rows < kMinImageSide)
+    return result;
   return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray) : DetectCheckerboard(gray);
 }
 

@@ -188,6 +188,8 @@ TEST(RenderDetect, OneBitBorderBoard) {
   const DetectionResult result = Detector(board).Detect(image);
   const Errors e = Compare(board, camera, T_W_C, result);
   EXPECT_EQ(result.tags_accepted, 36);
+  for (const TagRejection& r : result.rejected)
+    ADD_FAILURE() << "tag " << r.tag_id << ": " << ToString(r.reason);
   EXPECT_LE(e.rms, 0.1);
   // The 2-bit family must not read a 1-bit board (and vice versa).
   TargetConfig wrong = config;

@@ -1,0 +1,107 @@
+// Board detection and rendering speed, single thread (per core): images per second for the
+// AprilGrid detector at 752x480 and 1280x800 (rendered views of the 6x6 grid filling ~half the
+// image, and EuRoC's real image), the checkerboard detector (opencv-doc's left01.jpg), and the
+// renderer's frames per second. Numbers go to docs/performance.md, section "Detection".
+#include <benchmark/benchmark.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <filesystem>
+
+#include "ctcal/targets/detector.h"
+#include "ctcal/targets/renderer.h"
+
+namespace ctcal {
+namespace {
+
+// A pinhole camera of the given size with a 90 degree horizontal field of view.
+UnprojectFunction Pinhole(int width, int height) {
+  const double f = 0.5 * width;
+  return [=](const Eigen::Vector2d& uv, Eigen::Vector3d* ray) {
+    *ray = Eigen::Vector3d((uv.x() - 0.5 * (width - 1)) / f, (uv.y() - 0.5 * (height - 1)) / f, 1);
+    return true;
+  };
+}
+
+// Looking down at the 6x6 grid's centre from 0.75 m with a small tilt.
+Eigen::Isometry3d View() {
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.linear() = (Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) *
+                    Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) *
+                    Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))
+                       .toRotationMatrix();
+  T_W_C.translation() = Eigen::Vector3d(0.45, 0.33, 0.75);
+  return T_W_C;
+}
+
+void DetectRendered(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const int height = static_cast<int>(state.range(1));
+  const Board board{TargetConfig{}};
+  const cv::Mat image =
+      BoardRenderer(board, width, height, Pinhole(width, height)).Render(View(), 1);
+  const Detector detector(board);
+  size_t corners = 0;
+  for (auto _ : state) {
+    const DetectionResult result = detector.Detect(image);
+    corners = result.corners.size();
+    benchmark::DoNotOptimize(corners);
+  }
+  state.counters["corners"] = static_cast<double>(corners);
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(DetectRendered)->Args({752, 480})->Args({1280, 800})->Unit(benchmark::kMillisecond);
+
+void DetectFile(benchmark::State& state, const std::string& path, const TargetConfig& config) {
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError((path + " is absent").c_str());
+    return;
+  }
+  const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const Detector detector{Board(config)};
+  size_t corners = 0;
+  for (auto _ : state) {
+    corners = detector.Detect(image).corners.size();
+    benchmark::DoNotOptimize(corners);
+  }
+  state.counters["corners"] = static_cast<double>(corners);
+  state.SetItemsProcessed(state.iterations());
+}
+
+void DetectEurocReal(benchmark::State& state) {
+  // bench/ has no CTCAL_SOURCE_DIR: the shared data sit beside the source tree.
+  const std::filesystem::path root = std::filesystem::path(__FILE__).parent_path().parent_path();
+  DetectFile(state, (root / ".." / "shared" / "data" / "aprilgrid" / "EuRoC.png").string(),
+             TargetConfig{});
+}
+BENCHMARK(DetectEurocReal)->Unit(benchmark::kMillisecond);
+
+void DetectCheckerboardReal(benchmark::State& state) {
+  TargetConfig config;
+  config.type = TargetType::kCheckerboard;
+  config.target_rows = 6;
+  config.target_cols = 9;
+  config.row_spacing_m = 0.025;
+  config.col_spacing_m = 0.025;
+  DetectFile(state, "/usr/share/doc/opencv-doc/examples/data/left01.jpg", config);
+}
+BENCHMARK(DetectCheckerboardReal)->Unit(benchmark::kMillisecond);
+
+void Render(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const int height = static_cast<int>(state.range(1));
+  const Board board{TargetConfig{}};
+  const BoardRenderer renderer(board, width, height, Pinhole(width, height));
+  uint64_t seed = 0;
+  for (auto _ : state) {
+    const cv::Mat image = renderer.Render(View(), ++seed);
+    benchmark::DoNotOptimize(image.data);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(Render)->Args({752, 480})->Args({1280, 800})->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace ctcal
+
+BENCHMARK_MAIN();
