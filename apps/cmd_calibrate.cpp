@@ -1,0 +1,114 @@
+// `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline] [--threads N]` (SPEC
+// section 8): loads the rig and the dataset, runs the continuous-time calibrator
+// (calibrator/spline_calibrator.h) and writes OUT/result.yaml, the Kalibr files and OUT/log.txt.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/kalibr_files.h"
+#include "ctcal/sensors/rig_yaml.h"
+
+namespace ctcal::app {
+
+int RunCalibrate(int argc, char** argv) {
+  namespace po = boost::program_options;
+  CommandLine cli("calibrate",
+                  "--rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both] "
+                  "[--threads N] [--autodiff]",
+                  "Calibrate a visual-inertial rig from a recording of a target board: every "
+                  "estimated intrinsic, extrinsic and time offset with its sigma.");
+  std::string rig_path, data_dir, out_dir, method, representation;
+  SplineCalibratorOptions options;
+  cli.options().add_options()("rig", po::value(&rig_path)->required(),
+                              "rig file with initial guesses (SPEC section 7)")(
+      "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
+      "out", po::value(&out_dir)->required(), "output folder")(
+      "method", po::value(&method)->default_value("spline"), "spline (discrete, both: later)")(
+      "threads", po::value(&options.threads)->default_value(0), "solver threads (0: all cores)")(
+      "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
+      "order", po::value(&options.order)->default_value(4), "trajectory spline order: 4, 5, 6")(
+      "representation", po::value(&representation)->default_value("split"),
+      "trajectory spline: split (SO3 x R3) or joint (SE3)")(
+      "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
+      "trajectory knot spacing in s (0: from the motion's bandwidth)")(
+      "bias-knot-spacing", po::value(&options.bias_knot_spacing_s)->default_value(1.0),
+      "bias spline knot spacing in s")("max-iterations",
+                                       po::value(&options.max_iterations)->default_value(50),
+                                       "Levenberg-Marquardt iterations per solve");
+  if (const auto exit_code = cli.Parse(argc, argv))
+    return *exit_code;
+  options.analytic = !cli.vm()["autodiff"].as<bool>();
+  if (method != "spline")
+    return cli.UsageError("--method " + method +
+                          ": only 'spline' is implemented (discrete and both come later)");
+  if (representation == "split")
+    options.representation = Se3Representation::kSplit;
+  else if (representation == "joint")
+    options.representation = Se3Representation::kJoint;
+  else
+    return cli.UsageError("--representation must be split or joint, got " + representation);
+  if (options.threads < 0)
+    return cli.UsageError("--threads must be >= 0");
+
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  std::ofstream log_file(out_dir + "/log.txt");
+  if (!log_file)
+    return cli.RunFailed(out_dir + "/log.txt: cannot write the log");
+  const CalibrationLog log = [&](const std::string& line) {
+    std::cout << line << std::endl;
+    log_file << line << '\n';
+  };
+
+  RigConfig rig;
+  std::map<std::string, SensorData> data;
+  try {
+    std::vector<std::string> warnings;
+    rig = LoadRig(rig_path, &warnings);
+    for (const std::string& w : warnings)
+      log("warning: " + w);
+    warnings.clear();
+    data = LoadDataset(data_dir, rig, &warnings);
+    for (const std::string& w : warnings)
+      log("warning: " + w);
+  } catch (const std::exception& e) {
+    return cli.InputError(e.what());
+  }
+
+  SplineCalibrationResult result;
+  try {
+    result = CalibrateSpline(rig, data, options, log);
+  } catch (const CalibrationInputError& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.InputError(e.what());
+  } catch (const std::exception& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.RunFailed(e.what());
+  }
+
+  try {
+    SaveRig(result.result, out_dir + "/result.yaml");
+    SaveKalibrFiles(result.result, out_dir);
+  } catch (const std::exception& e) {
+    return cli.RunFailed(e.what());
+  }
+  log("");
+  log(FormatParameterTable(result.result));
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "done: %d iterations, %.2f s solving (%.3f s per iteration), %.2f s covariance, "
+                "%.2f s total",
+                result.iterations, result.solve_seconds, result.seconds_per_iteration,
+                result.covariance_seconds, result.total_seconds);
+  log(line);
+  log("wrote " + out_dir + "/result.yaml, camchain-imucam.yaml, imu.yaml, log.txt");
+  return kExitOk;
+}
+
+}  // namespace ctcal::app

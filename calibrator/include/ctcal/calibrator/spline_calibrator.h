@@ -1,0 +1,94 @@
+// The continuous-time calibrator (`ctcal calibrate --method spline`): one sparse Ceres problem over
+// the base IMU trajectory T_W_B(t) (an SE(3) B-spline), bias splines of every inertial sensor and
+// every estimated calibration quantity, started from a close guess (docs/calibrator.md).
+//
+// Stages, each separable so that a coarse-guess initialisation can replace the first one:
+//   1. initialise: board poses by PnP per camera frame, base poses T_W_B = T_W_C T_B_C^-1 at
+//      stamp + time_offset, the trajectory spline fitted to them, gravity from the
+//      accelerometers against the spline, biases 0 (spline_init.h);
+//   2. robust solve (Huber on the whitened corner residuals);
+//   3. outliers removed (whitened corner residual beyond the chi-square gate), plain L2 solve,
+//      residuals re-bucketed onto the spline segment their time offsets now select, re-solved;
+//   4. marginal covariance of the calibration (trajectory and biases marginalised), per-sensor
+//      residual statistics, the result rig.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/rig.h"
+#include "ctcal/spline/se3_spline.h"
+
+namespace ctcal {
+
+// Bad input (a camera that never sees the board, too few views, time ranges that do not overlap):
+// the message names the sensor.
+class CalibrationInputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A run that could not complete on valid input (a diverging solve: NaN, no convergence).
+class CalibrationFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SplineCalibratorOptions {
+  int order = 4;  // trajectory spline order N: 4, 5 or 6
+  Se3Representation representation = Se3Representation::kSplit;
+  // Knot spacing of the trajectory (s); 0 = from the motion's bandwidth (knot_spacing.h).
+  double knot_spacing_s = 0.0;
+  // Knot spacing of the (linear) bias splines, s.
+  double bias_knot_spacing_s = 1.0;
+  bool analytic = true;  // false: the same residuals through ceres::Jet (--autodiff)
+  int threads = 0;       // 0 = every core
+  int max_iterations = 50;
+  // Huber threshold on the norm of a whitened corner residual during the robust solve.
+  double huber_threshold = 3.0;
+  // Chi-square gate (probability) on the whitened corner residuals for the outlier removal.
+  double outlier_probability = 0.999;
+  int min_corners_per_view = 8;
+  int min_views = 10;
+  int max_rebucket_rounds = 3;
+  bool compute_covariance = true;
+};
+
+struct CameraOutliers {
+  std::string camera;
+  int corners = 0;  // corner residuals in the problem before removal
+  int removed = 0;  // beyond the gate
+  int invalid = 0;  // not projectable at the initial guess (never added)
+  int views = 0;    // frames with a board pose
+};
+
+struct SplineCalibrationResult {
+  RigConfig result;  // values, sigma, solver, residuals, observability (SPEC section 7)
+  std::vector<CameraOutliers> outliers;
+  double knot_spacing_s = 0.0;
+  int num_knots = 0;
+  int iterations = 0;
+  double solve_seconds = 0.0;  // the Ceres solves
+  double seconds_per_iteration = 0.0;
+  double covariance_seconds = 0.0;
+  double total_seconds = 0.0;
+  std::vector<std::string> warnings;
+};
+
+// Receives every progress line (stages, iterations with their cost, warnings).
+using CalibrationLog = std::function<void(const std::string&)>;
+
+// Throws CalibrationInputError / CalibrationFailure as above.
+SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
+                                        const std::map<std::string, SensorData>& data,
+                                        const SplineCalibratorOptions& options,
+                                        const CalibrationLog& log);
+
+// The final table of the terminal: one row per estimated scalar with its value and sigma.
+std::string FormatParameterTable(const RigConfig& result);
+
+}  // namespace ctcal

@@ -1,0 +1,501 @@
+#include "ctcal/calibrator/spline_calibrator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+#include <thread>
+
+#include "ctcal/calibrator/knot_spacing.h"
+#include "ctcal/calibrator/marginal_covariance.h"
+#include "spline_problem_impl.h"
+
+namespace ctcal {
+
+namespace spline_internal {
+// Instantiated in spline_problem_split.cpp / spline_problem_joint.cpp.
+#define CTCAL_DECLARE_PIPELINE(N, REP)                         \
+  extern template void RunPipeline<N, Se3Representation::REP>( \
+      Prepared*, const SplineCalibratorOptions&, const CalibrationLog&, SplineCalibrationResult*);
+CTCAL_DECLARE_PIPELINE(4, kSplit)
+CTCAL_DECLARE_PIPELINE(5, kSplit)
+CTCAL_DECLARE_PIPELINE(6, kSplit)
+CTCAL_DECLARE_PIPELINE(4, kJoint)
+CTCAL_DECLARE_PIPELINE(5, kJoint)
+CTCAL_DECLARE_PIPELINE(6, kJoint)
+#undef CTCAL_DECLARE_PIPELINE
+}  // namespace spline_internal
+
+namespace {
+
+using spline_internal::Prepared;
+using spline_internal::PreparedCamera;
+using spline_internal::PreparedInertial;
+
+std::string Seconds(std::int64_t t_ns) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", 1e-9 * static_cast<double>(t_ns));
+  return b;
+}
+
+std::string Fmt(const char* format, double a, double b = 0.0, double c = 0.0) {
+  char line[256];
+  std::snprintf(line, sizeof line, format, a, b, c);
+  return line;
+}
+
+// Selects the data, finds the board views and the trajectory's time range, sizes the bias
+// splines. Throws CalibrationInputError naming the sensor for data the calibration cannot use.
+void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& data,
+             const SplineCalibratorOptions& options, const CalibrationLog& log, Prepared* prep) {
+  prep->state = state;
+  const RigConfig& rig = state->rig();
+  const Board board(rig.target);
+  const auto data_of = [&](const std::string& name) -> const SensorData& {
+    const auto it = data.find(name);
+    if (it == data.end())
+      throw CalibrationInputError("sensors." + name + ": no data loaded");
+    return it->second;
+  };
+
+  // Board views and base poses of every camera.
+  std::int64_t cam_lo = std::numeric_limits<std::int64_t>::max();
+  std::int64_t cam_hi = std::numeric_limits<std::int64_t>::min();
+  for (auto& sp : state->sensors()) {
+    SensorState& s = *sp;
+    if (s.config.type != SensorType::kCamera)
+      continue;
+    const SensorData& d = data_of(s.name());
+    if (!d.has_corners)
+      throw CalibrationInputError("sensors." + s.name() +
+                                  ": no corners.csv (run `ctcal detect` on its images first)");
+    if (d.corners.empty())
+      throw CalibrationInputError("sensors." + s.name() + ": the camera never sees the board");
+    PreparedCamera cam;
+    cam.state = &s;
+    cam.views = EstimateBoardViews(*s.camera, board, d.corners, options.min_corners_per_view);
+    if (static_cast<int>(cam.views.size()) < options.min_views)
+      throw CalibrationInputError(
+          "sensors." + s.name() + ": too few views of the board (" +
+          std::to_string(cam.views.size()) +
+          " frames with a board pose from >= " + std::to_string(options.min_corners_per_view) +
+          " corners, need " + std::to_string(options.min_views) + ")");
+    const std::vector<TimedPose> poses = BasePosesFromViews(cam.views, s.T_B_S(), s.time_offset);
+    prep->base_poses.insert(prep->base_poses.end(), poses.begin(), poses.end());
+    cam_lo = std::min(cam_lo, poses.front().t_ns);
+    cam_hi = std::max(cam_hi, poses.back().t_ns);
+    prep->cameras.push_back(std::move(cam));
+    log("  " + s.name() + ": " + std::to_string(prep->cameras.back().views.size()) +
+        " board views from " + std::to_string(d.corners.size()) + " corners");
+  }
+  if (prep->cameras.empty())
+    throw CalibrationInputError("the rig has no camera: nothing anchors the trajectory");
+  std::sort(prep->base_poses.begin(), prep->base_poses.end(),
+            [](const TimedPose& a, const TimedPose& b) { return a.t_ns < b.t_ns; });
+
+  // The trajectory spans the base IMU and the camera views together.
+  SensorState& base = state->base();
+  const SensorData& base_data = data_of(base.name());
+  if (base_data.imu.size() < 2)
+    throw CalibrationInputError("sensors." + base.name() + ": no IMU samples");
+  prep->t0_ns = std::max(base_data.imu.front().t_ns, cam_lo);
+  prep->t1_ns = std::min(base_data.imu.back().t_ns, cam_hi);
+  if (prep->t1_ns - prep->t0_ns < 1000000000LL)
+    throw CalibrationInputError("sensor time ranges do not overlap: " + base.name() + " [" +
+                                Seconds(base_data.imu.front().t_ns) + ", " +
+                                Seconds(base_data.imu.back().t_ns) + "] s, camera views [" +
+                                Seconds(cam_lo) + ", " + Seconds(cam_hi) +
+                                "] s (base clock); need >= 1 s in common");
+
+  // Knot spacing from the motion's bandwidth, measured on the base IMU.
+  if (options.knot_spacing_s > 0.0) {
+    prep->knot_spacing_s = options.knot_spacing_s;
+  } else {
+    std::vector<std::int64_t> t;
+    std::vector<Eigen::Vector3d> w, a;
+    for (const ImuSample& z : base_data.imu) {
+      if (z.t_ns < prep->t0_ns || z.t_ns > prep->t1_ns)
+        continue;
+      t.push_back(z.t_ns);
+      w.push_back(z.w_m);
+      a.push_back(z.a_m);
+    }
+    const InertialNoise& n = base.config.noise;
+    const MotionBandwidth bw =
+        ChooseKnotSpacing(t, w, a, n.GyroSampleSigma(), n.AccelSampleSigma());
+    prep->knot_spacing_s = bw.knot_spacing_s;
+    log(Fmt("  motion bandwidth: gyro %.2f Hz, accel %.2f Hz -> knot spacing %.4f s", bw.gyro_hz,
+            bw.accel_hz, bw.knot_spacing_s));
+  }
+
+  // Samples whose base time lies inside the trajectory (a margin for moving time offsets).
+  const std::int64_t margin_ns = 10000000;  // 10 ms
+  const std::int64_t lo = prep->t0_ns + margin_ns;
+  const std::int64_t hi = prep->t1_ns - margin_ns;
+  const auto inside = [&](std::int64_t t_ns, double offset) {
+    const std::int64_t tb = t_ns + static_cast<std::int64_t>(std::llround(offset * 1e9));
+    return tb >= lo && tb <= hi;
+  };
+  for (PreparedCamera& cam : prep->cameras) {
+    SensorState& s = *cam.state;
+    const SensorData& d = data_of(s.name());
+    std::size_t v = 0;
+    for (const CornerObservation& c : d.corners) {
+      while (v < cam.views.size() && cam.views[v].t_ns < c.t_ns)
+        ++v;
+      if (v == cam.views.size() || cam.views[v].t_ns != c.t_ns || !inside(c.t_ns, s.time_offset))
+        continue;
+      // Only corners that project validly at the guess enter (the residual fails elsewhere).
+      const Eigen::Vector3d p_C = cam.views[v].T_C_W * board.Corner(c.corner_id);
+      Eigen::Vector2d uv;
+      if (!s.camera->Project(p_C, &uv)) {
+        ++cam.invalid;
+        continue;
+      }
+      CornerMeasurement m;
+      m.p_W = board.Corner(c.corner_id);
+      m.uv = Eigen::Vector2d(c.u, c.v);
+      m.sigma_px = c.sigma.value_or(s.config.pixel_sigma);
+      cam.corners.push_back(m);
+      cam.stamps.push_back(c.t_ns);
+    }
+    cam.removed.assign(cam.corners.size(), false);
+  }
+
+  // Inertial sensors (the base first) and their bias splines on their own clocks.
+  const auto add_inertial = [&](SensorState& s) {
+    const SensorData& d = data_of(s.name());
+    PreparedInertial in;
+    in.state = &s;
+    const double offset = s.is_base ? 0.0 : s.time_offset;
+    std::int64_t first = 0, last = 0, own_lo = 0, own_hi = 0;
+    if (s.config.type == SensorType::kImu) {
+      if (!d.imu.empty()) {
+        own_lo = d.imu.front().t_ns;
+        own_hi = d.imu.back().t_ns;
+      }
+      for (const ImuSample& z : d.imu) {
+        if (inside(z.t_ns, offset))
+          in.imu.push_back(z);
+      }
+      if (!in.imu.empty()) {
+        first = in.imu.front().t_ns;
+        last = in.imu.back().t_ns;
+      }
+    } else {
+      if (!d.gyro.empty()) {
+        own_lo = d.gyro.front().t_ns;
+        own_hi = d.gyro.back().t_ns;
+      }
+      for (const GyroSample& z : d.gyro) {
+        if (inside(z.t_ns, offset))
+          in.gyro.push_back(z);
+      }
+      if (!in.gyro.empty()) {
+        first = in.gyro.front().t_ns;
+        last = in.gyro.back().t_ns;
+      }
+    }
+    const std::size_t n = in.imu.size() + in.gyro.size();
+    if (n < 100 || last - first < 1000000000LL)
+      throw CalibrationInputError(
+          "sensor time ranges do not overlap: sensors." + s.name() + " [" + Seconds(own_lo) + ", " +
+          Seconds(own_hi) + "] s on its clock (time_offset " + Fmt("%.6f", offset) +
+          " s) vs the trajectory [" + Seconds(prep->t0_ns) + ", " + Seconds(prep->t1_ns) +
+          "] s: " + std::to_string(n) + " samples in common");
+    const std::int64_t dt_b =
+        static_cast<std::int64_t>(std::llround(options.bias_knot_spacing_s * 1e9));
+    const int knots = static_cast<int>((last - first + dt_b - 1) / dt_b) + 1;
+    s.bias_gyro.timing = KnotTiming{first, dt_b};
+    s.bias_gyro.knots.assign(3 * static_cast<std::size_t>(std::max(knots, 2)), 0.0);
+    if (s.config.type == SensorType::kImu) {
+      s.bias_accel.timing = s.bias_gyro.timing;
+      s.bias_accel.knots = s.bias_gyro.knots;
+    }
+    prep->inertial.push_back(std::move(in));
+  };
+  add_inertial(base);
+  for (auto& sp : state->sensors()) {
+    if (!sp->is_base && sp->config.IsInertial())
+      add_inertial(*sp);
+  }
+}
+
+// sigma of gravity_W (m/s^2, per component) from the 2x2 covariance of its sphere tangent.
+Eigen::Vector3d GravitySigma(const double* g, const Eigen::Matrix2d& cov_tangent) {
+  ceres::SphereManifold<3> sphere;
+  Eigen::Matrix<double, 3, 2, Eigen::RowMajor> J;
+  sphere.PlusJacobian(g, J.data());
+  const Eigen::Matrix3d cov = J * cov_tangent * J.transpose();
+  return cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+}  // namespace
+
+namespace spline_internal {
+
+ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
+                                     ceres::IterationCallback* callback) {
+  ceres::Solver::Options so;
+  so.minimizer_type = ceres::TRUST_REGION;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  so.num_threads = options.threads;
+  so.max_num_iterations = options.max_iterations;
+  // A cost change of 0.5 moves an estimate by one sigma: converge far below that.
+  so.function_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  if (callback != nullptr)
+    so.callbacks.push_back(callback);
+  return so;
+}
+
+void FinishResult(
+    ceres::Problem& problem, CalibrationState& state,
+    const std::vector<ceres::ResidualBlockId>& prior_ids,
+    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& corner_ids,
+    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
+    const SplineCalibratorOptions& options, const CalibrationLog& log,
+    SplineCalibrationResult* out) {
+  RigConfig& result = out->result;
+  const std::optional<SolverSummary> solver = result.solver;
+  result = state.ToRig();
+  result.solver = solver;
+
+  // --- residual statistics ---
+  for (const auto& [name, ids] : corner_ids) {
+    SensorResiduals r;
+    const SensorState* s = state.Find(name);
+    double raw = 0.0, white = 0.0;
+    for (const ceres::ResidualBlockId id : ids) {
+      double e[2];
+      problem.EvaluateResidualBlock(id, false, nullptr, e, nullptr);
+      const double sq = e[0] * e[0] + e[1] * e[1];
+      white += sq;
+      (void)s;
+      raw += sq;  // scaled below by the corner's sigma when uniform
+    }
+    r.count = static_cast<std::int64_t>(2 * ids.size());
+    const double n = std::max<double>(1.0, static_cast<double>(r.count));
+    r.rms_whitened = std::sqrt(white / n);
+    r.rms_px = std::sqrt(raw / n) * (s != nullptr ? s->config.pixel_sigma : 1.0);
+    result.residuals[name] = r;
+  }
+  for (const auto& [name, ids] : inertial_ids) {
+    SensorResiduals r;
+    const SensorState* s = state.Find(name);
+    const InertialNoise& noise = s->config.noise;
+    const bool imu = s->config.type == SensorType::kImu;
+    const int m = imu ? 6 : 3;
+    double wg = 0.0, wa = 0.0;
+    for (const ceres::ResidualBlockId id : ids) {
+      double e[6];
+      problem.EvaluateResidualBlock(id, false, nullptr, e, nullptr);
+      for (int i = 0; i < 3; ++i)
+        wg += e[i] * e[i];
+      for (int i = 3; i < m; ++i)
+        wa += e[i] * e[i];
+    }
+    const double n = std::max<double>(1.0, static_cast<double>(ids.size()));
+    r.count = static_cast<std::int64_t>(m * ids.size());
+    r.rms_whitened_gyro = std::sqrt(wg / (3.0 * n));
+    r.rms_gyro = *r.rms_whitened_gyro * noise.GyroSampleSigma();
+    if (imu) {
+      r.rms_whitened_accel = std::sqrt(wa / (3.0 * n));
+      r.rms_accel = *r.rms_whitened_accel * noise.AccelSampleSigma();
+    }
+    r.rms_whitened = std::sqrt((wg + wa) / (static_cast<double>(m) * n));
+    result.residuals[name] = r;
+  }
+  for (const auto& [name, r] : result.residuals) {
+    char line[256];
+    std::snprintf(line, sizeof line, "  %-8s whitened RMS %.3f over %lld residuals", name.c_str(),
+                  *r.rms_whitened, static_cast<long long>(r.count));
+    log(line);
+    if (*r.rms_whitened > 1.5 || *r.rms_whitened < 0.67) {
+      const std::string w = "warning: sensors." + name + ": whitened residual RMS " +
+                            Fmt("%.3f", *r.rms_whitened) +
+                            " is far from 1: its stated noise (noise: / pixel_sigma) is wrong";
+      log("  " + w);
+      out->warnings.push_back(w);
+    }
+  }
+
+  if (!options.compute_covariance)
+    return;
+
+  // --- marginal covariance ---
+  std::vector<ParameterBlockInfo> blocks = state.Blocks();
+  std::vector<CalibrationBlock> calib;
+  std::vector<const ParameterBlockInfo*> used;
+  for (const ParameterBlockInfo& b : blocks) {
+    if (!b.estimated || !problem.HasParameterBlock(b.values) ||
+        problem.IsParameterBlockConstant(b.values))
+      continue;
+    calib.push_back(CalibrationBlock{b.values, b.names, b.unit});
+    used.push_back(&b);
+  }
+  std::vector<ceres::ResidualBlockId> all, data_only;
+  problem.GetResidualBlocks(&all);
+  {
+    std::vector<ceres::ResidualBlockId> priors(prior_ids);
+    std::sort(priors.begin(), priors.end());
+    for (const ceres::ResidualBlockId id : all) {
+      if (!std::binary_search(priors.begin(), priors.end(), id))
+        data_only.push_back(id);
+    }
+  }
+  const MarginalInformation info = ComputeMarginalInformation(problem, calib, all);
+  const CalibrationCovariance cov = InvertInformation(info);
+  const MarginalInformation info_data =
+      prior_ids.empty() ? info : ComputeMarginalInformation(problem, calib, data_only);
+  const CalibrationCovariance cov_data = prior_ids.empty() ? cov : InvertInformation(info_data);
+  if (info.nuisance_damping > 0.0)
+    log(Fmt("  warning: the trajectory/bias states needed damping %.1e to be factored",
+            info.nuisance_damping));
+
+  Observability obs;
+  std::vector<bool> undetermined(static_cast<std::size_t>(cov.sigma.size()), false);
+  for (std::size_t i = 0; i < undetermined.size(); ++i) {
+    undetermined[i] = cov.undetermined[i] || cov_data.undetermined[i];
+    if (undetermined[i]) {
+      std::string name = info.names[i];
+      if (name.rfind("gravity_W.direction", 0) == 0)
+        name = "gravity_W";
+      if (std::find(obs.unobservable.begin(), obs.unobservable.end(), name) ==
+          obs.unobservable.end())
+        obs.unobservable.push_back(name);
+    }
+  }
+  for (const int col : cov_data.null_directions) {
+    ObservabilityDirection dir;
+    dir.eigenvalue = cov_data.scaled_eigenvalues(col);
+    for (Eigen::Index i = 0; i < cov_data.scaled_eigenvectors.rows(); ++i) {
+      const double l = cov_data.scaled_eigenvectors(i, col);
+      if (std::abs(l) > 0.1)
+        dir.parameters.push_back(ParameterLoading{info_data.names[static_cast<std::size_t>(i)], l});
+    }
+    obs.directions.push_back(dir);
+  }
+  result.observability = obs;
+
+  const double inf = std::numeric_limits<double>::infinity();
+  int offset = 0;
+  for (const ParameterBlockInfo* b : used) {
+    std::vector<double> sig(static_cast<std::size_t>(b->tangent_size));
+    for (int i = 0; i < b->tangent_size; ++i) {
+      const auto k = static_cast<std::size_t>(offset + i);
+      sig[static_cast<std::size_t>(i)] = undetermined[k] ? inf : cov.sigma(offset + i);
+    }
+    if (b->key == "gravity_W") {
+      if (undetermined[static_cast<std::size_t>(offset)] ||
+          undetermined[static_cast<std::size_t>(offset + 1)])
+        result.sigma_gravity_W = Eigen::Vector3d::Constant(inf);
+      else
+        result.sigma_gravity_W =
+            GravitySigma(b->values, cov.covariance.block<2, 2>(offset, offset));
+    } else {
+      SensorConfig* c = result.Find(b->sensor);
+      if (b->key == "params") {
+        const int ni = state.Find(b->sensor)->camera->NumIntrinsics();
+        c->sigma.values["intrinsics"] = std::vector<double>(sig.begin(), sig.begin() + ni);
+        if (b->tangent_size > ni)
+          c->sigma.values["distortion_coeffs"] = std::vector<double>(sig.begin() + ni, sig.end());
+      } else {
+        c->sigma.values[b->key] = sig;
+      }
+    }
+    offset += b->tangent_size;
+  }
+  if (!obs.unobservable.empty()) {
+    std::string names;
+    for (const std::string& n : obs.unobservable)
+      names += " " + n;
+    const std::string w = "warning: the data do not determine:" + names + " (sigma .inf)";
+    log("  " + w);
+    out->warnings.push_back(w);
+  }
+}
+
+}  // namespace spline_internal
+
+SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
+                                        const std::map<std::string, SensorData>& data,
+                                        const SplineCalibratorOptions& options_in,
+                                        const CalibrationLog& log) {
+  const auto t_start = std::chrono::steady_clock::now();
+  SplineCalibratorOptions options = options_in;
+  if (options.threads <= 0)
+    options.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (options.order < 4 || options.order > 6)
+    throw CalibrationInputError("spline order must be 4, 5 or 6, got " +
+                                std::to_string(options.order));
+  if (rig.IsCameraOnly())
+    throw CalibrationInputError(
+        "camera-only rigs are not supported by --method spline yet (the rig has no IMU)");
+
+  log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu);
+  CalibrationState state(rig);
+  Prepared prep;
+  log("[2/6] board views and data selection");
+  Prepare(&state, data, options, log, &prep);
+  log(Fmt("  trajectory: %.3f .. %.3f s (base clock), knot spacing %.4f s",
+          1e-9 * static_cast<double>(prep.t0_ns), 1e-9 * static_cast<double>(prep.t1_ns),
+          prep.knot_spacing_s));
+
+  SplineCalibrationResult out;
+  using spline_internal::RunPipeline;
+  const bool split = options.representation == Se3Representation::kSplit;
+  switch (options.order) {
+    case 4:
+      split ? RunPipeline<4, Se3Representation::kSplit>(&prep, options, log, &out)
+            : RunPipeline<4, Se3Representation::kJoint>(&prep, options, log, &out);
+      break;
+    case 5:
+      split ? RunPipeline<5, Se3Representation::kSplit>(&prep, options, log, &out)
+            : RunPipeline<5, Se3Representation::kJoint>(&prep, options, log, &out);
+      break;
+    default:
+      split ? RunPipeline<6, Se3Representation::kSplit>(&prep, options, log, &out)
+            : RunPipeline<6, Se3Representation::kJoint>(&prep, options, log, &out);
+      break;
+  }
+  out.total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  if (out.result.solver)
+    out.result.solver->seconds = out.total_seconds;
+  return out;
+}
+
+std::string FormatParameterTable(const RigConfig& result) {
+  std::ostringstream os;
+  char line[200];
+  std::snprintf(line, sizeof line, "%-28s %16s %14s\n", "parameter", "value", "sigma");
+  os << line;
+  for (const ScalarParameter& p : ScalarParameters(result, true)) {
+    double value = 0.0;
+    try {
+      value = ParameterValue(result, p);
+    } catch (const std::exception&) {
+      continue;
+    }
+    const std::optional<double> sigma = ParameterSigma(result, p);
+    const char* unit = p.rotation ? " deg" : "";
+    const double scale = p.rotation ? 180.0 / M_PI : 1.0;
+    if (sigma)
+      std::snprintf(line, sizeof line, "%-28s %16.9g %14.4g%s\n", p.name.c_str(), value * scale,
+                    *sigma * scale, unit);
+    else
+      std::snprintf(line, sizeof line, "%-28s %16.9g %14s%s\n", p.name.c_str(), value * scale, "-",
+                    unit);
+    os << line;
+  }
+  return os.str();
+}
+
+}  // namespace ctcal

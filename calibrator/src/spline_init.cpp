@@ -1,0 +1,103 @@
+#include "ctcal/calibrator/spline_init.h"
+
+#include <cmath>
+#include <map>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+namespace ctcal {
+namespace {
+
+// RANSAC threshold on the normalised plane: ~0.3 deg, several pixels for any lens of the SPEC.
+constexpr double kRansacThreshold = 0.005;
+
+}  // namespace
+
+std::vector<BoardView> EstimateBoardViews(const CameraModel& camera, const Board& board,
+                                          const std::vector<CornerObservation>& corners,
+                                          int min_corners) {
+  std::vector<BoardView> views;
+  std::size_t i = 0;
+  while (i < corners.size()) {
+    std::size_t j = i;
+    while (j < corners.size() && corners[j].t_ns == corners[i].t_ns)
+      ++j;
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    for (std::size_t k = i; k < j; ++k) {
+      Eigen::Vector3d ray;
+      if (!camera.Unproject(Eigen::Vector2d(corners[k].u, corners[k].v), &ray) || ray.z() < 0.05)
+        continue;
+      const Eigen::Vector3d& p = board.Corner(corners[k].corner_id);
+      object.emplace_back(p.x(), p.y(), p.z());
+      image.emplace_back(ray.x() / ray.z(), ray.y() / ray.z());
+    }
+    BoardView view;
+    view.t_ns = corners[i].t_ns;
+    view.corners = static_cast<int>(j - i);
+    i = j;
+    if (static_cast<int>(object.size()) < min_corners)
+      continue;
+    const cv::Matx33d K = cv::Matx33d::eye();
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    // The board is planar: IPPE gives the pose of a minimal sample, the iterative (Levenberg-
+    // Marquardt) refinement polishes it on all inliers.
+    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 100,
+                            kRansacThreshold, 0.999, inliers, cv::SOLVEPNP_IPPE) ||
+        static_cast<int>(inliers.size()) < min_corners)
+      continue;
+    std::vector<cv::Point3d> obj_in;
+    std::vector<cv::Point2d> img_in;
+    for (const int k : inliers) {
+      obj_in.push_back(object[static_cast<std::size_t>(k)]);
+      img_in.push_back(image[static_cast<std::size_t>(k)]);
+    }
+    cv::solvePnP(obj_in, img_in, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+    cv::Mat R_cv;
+    cv::Rodrigues(rvec, R_cv);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    cv::cv2eigen(R_cv, R);
+    cv::cv2eigen(tvec, t);
+    view.T_C_W = Eigen::Isometry3d::Identity();
+    view.T_C_W.linear() = R;
+    view.T_C_W.translation() = t;
+    double sq = 0.0;
+    bool in_front = true;
+    for (std::size_t k = 0; k < obj_in.size(); ++k) {
+      const Eigen::Vector3d p_C =
+          view.T_C_W * Eigen::Vector3d(obj_in[k].x, obj_in[k].y, obj_in[k].z);
+      if (p_C.z() <= 0.0) {
+        in_front = false;
+        break;
+      }
+      sq += std::pow(p_C.x() / p_C.z() - img_in[k].x, 2) +
+            std::pow(p_C.y() / p_C.z() - img_in[k].y, 2);
+    }
+    if (!in_front)
+      continue;
+    view.inliers = static_cast<int>(obj_in.size());
+    view.rms_ray_error = std::sqrt(sq / (2.0 * static_cast<double>(obj_in.size())));
+    views.push_back(view);
+  }
+  return views;
+}
+
+std::vector<TimedPose> BasePosesFromViews(const std::vector<BoardView>& views,
+                                          const Eigen::Isometry3d& T_B_C, double time_offset) {
+  std::vector<TimedPose> poses;
+  poses.reserve(views.size());
+  const Eigen::Isometry3d T_C_B = T_B_C.inverse();
+  for (const BoardView& v : views) {
+    const Eigen::Isometry3d T_W_B = v.T_C_W.inverse() * T_C_B;
+    TimedPose p;
+    p.t_ns = v.t_ns + static_cast<std::int64_t>(std::llround(time_offset * 1e9));
+    p.q_W_B = Eigen::Quaterniond(T_W_B.linear()).normalized();
+    p.p_W_B = T_W_B.translation();
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+}  // namespace ctcal

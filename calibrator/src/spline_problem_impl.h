@@ -1,0 +1,692 @@
+// The continuous-time calibration problem, templated on the trajectory spline's order N and
+// representation (split / joint); instantiated in spline_problem_split.cpp / _joint.cpp and
+// dispatched from spline_calibrator.cpp. Private to the calibrator library.
+#pragma once
+
+#include <ceres/ceres.h>
+#include <ceres/sphere_manifold.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/residuals/residual_support.h"
+
+// TODO(residuals): bias_random_walk_residual.h uses Jacobian<> unqualified; this using makes it
+// compile until the header qualifies it.
+namespace ctcal {
+using residual_internal::Jacobian;
+}  // namespace ctcal
+
+#include "ctcal/calibrator/residuals/residuals.h"
+#include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/calibrator/spline_init.h"
+#include "ctcal/spline/se3_spline.h"
+#include "ctcal/spline/so3.h"
+#include "ctcal/spline/so3_manifold.h"
+#include "ctcal/targets/board.h"
+
+namespace ctcal {
+namespace spline_internal {
+
+// The order of the bias splines: linear, so that the knots are the bias at the knot times and the
+// random-walk residual (b_k+1 - b_k) / (sigma_bc sqrt(dt_b)) is exactly the Wiener process' density
+// of the knot values (the linear interpolation between them is the Brownian bridge's mean).
+inline constexpr int kBiasOrder = 2;
+
+// Everything the templated problem needs that does not depend on the spline type: the selected
+// data, the board views, and the shared run settings (prepared in spline_calibrator.cpp).
+struct PreparedCamera {
+  SensorState* state = nullptr;
+  std::vector<CornerMeasurement> corners;  // corners of frames with a board view
+  std::vector<std::int64_t> stamps;        // image stamp of each corner (camera clock)
+  std::vector<bool> removed;               // outliers
+  std::vector<BoardView> views;
+  int invalid = 0;
+};
+
+struct PreparedInertial {
+  SensorState* state = nullptr;
+  std::vector<ImuSample> imu;    // type imu, samples inside the trajectory's time range
+  std::vector<GyroSample> gyro;  // type gyro
+};
+
+struct Prepared {
+  CalibrationState* state = nullptr;
+  std::vector<PreparedCamera> cameras;
+  std::vector<PreparedInertial> inertial;  // the base first
+  std::vector<TimedPose> base_poses;       // from every camera's views, sorted by time
+  std::int64_t t0_ns = 0;                  // trajectory range, base clock
+  std::int64_t t1_ns = 0;
+  double knot_spacing_s = 0.0;
+};
+
+// The marginal covariance and residual statistics, written into the result rig
+// (spline_calibrator.cpp).
+void FinishResult(
+    ceres::Problem& problem, CalibrationState& state,
+    const std::vector<ceres::ResidualBlockId>& prior_ids,
+    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& corner_ids,
+    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
+    const SplineCalibratorOptions& options, const CalibrationLog& log,
+    SplineCalibrationResult* out);
+
+ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
+                                     ceres::IterationCallback* callback);
+
+// Prints each iteration's cost and time.
+class IterationLogger : public ceres::IterationCallback {
+ public:
+  explicit IterationLogger(const CalibrationLog& log) : log_(log) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "    iter %3d  cost %.9e  change %+.3e  |step| %.2e  %s %.2f s", s.iteration,
+                  s.cost, -s.cost_change, s.step_norm, s.step_is_successful ? "   " : "rej",
+                  s.cumulative_time_in_seconds);
+    log_(line);
+    if (!std::isfinite(s.cost))
+      return ceres::SOLVER_ABORT;
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  CalibrationLog log_;
+};
+
+template <int N, Se3Representation Rep>
+class SplineProblem {
+ public:
+  using Spline = Se3Spline<N, Rep>;
+  static constexpr int Nb = kBiasOrder;
+
+  SplineProblem(Prepared* prep, const SplineCalibratorOptions& options, const CalibrationLog& log)
+      : prep_(*prep),
+        state_(*prep->state),
+        options_(options),
+        log_(log),
+        spline_(MakeTiming(prep->t0_ns, prep->knot_spacing_s),
+                NumKnotsFor(prep->t0_ns, prep->t1_ns, prep->knot_spacing_s)) {}
+
+  static KnotTiming MakeTiming(std::int64_t t0_ns, double dt_s) {
+    return KnotTiming{t0_ns, static_cast<std::int64_t>(std::llround(dt_s * 1e9))};
+  }
+  static int NumKnotsFor(std::int64_t t0_ns, std::int64_t t1_ns, double dt_s) {
+    const std::int64_t dt_ns = static_cast<std::int64_t>(std::llround(dt_s * 1e9));
+    const std::int64_t segments = std::max<std::int64_t>(1, (t1_ns - t0_ns + dt_ns - 1) / dt_ns);
+    return static_cast<int>(segments) + N - 1;
+  }
+
+  const Spline& spline() const { return spline_; }
+  int NumKnots() const { return spline_.NumKnots(); }
+
+  // --- initialisation ---------------------------------------------------------------------------
+
+  // The trajectory from the base poses: a coarse fit (knots no closer than two camera frames, so
+  // that every segment sees poses), then the final spacing fitted to the camera poses, the coarse
+  // spline (weakly, between frames) and the base gyroscope (the fast rotations).
+  void InitializeTrajectory() {
+    const auto& poses = prep_.base_poses;
+    double frame_dt = 0.05;
+    if (poses.size() > 1)
+      frame_dt = 1e-9 * static_cast<double>(poses.back().t_ns - poses.front().t_ns) /
+                 static_cast<double>(poses.size() - 1);
+    const double coarse_dt = std::max(prep_.knot_spacing_s, 3.0 * frame_dt);
+    Spline coarse(MakeTiming(prep_.t0_ns, coarse_dt),
+                  NumKnotsFor(prep_.t0_ns, prep_.t1_ns, coarse_dt));
+    Fit(poses, nullptr, nullptr, &coarse);
+    const PreparedInertial& base = prep_.inertial.front();
+    std::vector<std::pair<std::int64_t, Eigen::Vector3d>> rates;
+    for (const ImuSample& s : base.imu) {
+      Eigen::Vector3d w_I, a_I;
+      base.state->imu->TrueFromRaw(s.w_m, s.a_m, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                   &w_I, &a_I);
+      rates.emplace_back(s.t_ns, w_I);
+    }
+    Fit(poses, &coarse, &rates, &spline_);
+  }
+
+  // g_W ~ mean over the base accelerometer of a_W(t) - R_W_B(t) a_I(t) (specific force
+  // a_I = R_W_B^T (a_W - g_W)), magnitude from the rig.
+  void InitializeGravity() {
+    const PreparedInertial& base = prep_.inertial.front();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (const ImuSample& s : base.imu) {
+      Eigen::Vector3d w_I, a_I;
+      base.state->imu->TrueFromRaw(s.w_m, s.a_m, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                   &w_I, &a_I);
+      const Se3Kinematics<double> kin = spline_.Evaluate(Clamp(s.t_ns), 2);
+      sum += kin.a_W - kin.R_W_B * a_I;
+      ++n;
+    }
+    state_.SetGravity(sum / std::max(n, 1));
+  }
+
+  // --- the problem ------------------------------------------------------------------------------
+
+  // Builds a fresh problem from the current values (the residuals' segments follow the current
+  // time offsets: this is also the re-bucketing).
+  void Build(bool robust) {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_ = std::make_unique<ceres::Problem>(po);
+    corner_ids_.clear();
+    inertial_ids_.clear();
+    prior_ids_.clear();
+    segments_.clear();
+    ceres::Problem& P = *problem_;
+
+    for (int k = 0; k < spline_.NumKnots(); ++k) {
+      double* d = spline_.KnotData(k);
+      if constexpr (Rep == Se3Representation::kJoint) {
+        P.AddParameterBlock(d, 7, &se3_right_);
+      } else {
+        P.AddParameterBlock(d, 4, &so3_right_);
+        P.AddParameterBlock(d + 4, 3);
+      }
+    }
+    blocks_ = state_.Blocks();
+    for (ParameterBlockInfo& b : blocks_) {
+      if (b.key == "gravity_W")
+        P.AddParameterBlock(b.values, 3, &sphere_);
+      else if (b.left_rotation)
+        P.AddParameterBlock(b.values, 4, &so3_left_);
+      else
+        P.AddParameterBlock(b.values, b.ambient_size);
+    }
+
+    for (PreparedCamera& cam : prep_.cameras)
+      AddCamera(&cam, robust);
+    for (PreparedInertial& in : prep_.inertial)
+      AddInertial(in);
+    AddPriors();
+
+    // Constant what is not estimated; bounds of the camera models' domains.
+    for (ParameterBlockInfo& b : blocks_) {
+      if (!P.HasParameterBlock(b.values))
+        continue;
+      if (!b.estimated)
+        P.SetParameterBlockConstant(b.values);
+    }
+    for (PreparedCamera& cam : prep_.cameras) {
+      Eigen::VectorXd lo, hi;
+      cam.state->camera->ParamBounds(&lo, &hi);
+      double* p = cam.state->camera->mutable_params();
+      for (int i = 0; i < lo.size(); ++i) {
+        if (std::isfinite(lo(i)))
+          P.SetParameterLowerBound(p, i, lo(i));
+        if (std::isfinite(hi(i)))
+          P.SetParameterUpperBound(p, i, hi(i));
+      }
+    }
+  }
+
+  ceres::Solver::Summary Solve() {
+    IterationLogger logger(log_);
+    ceres::Solver::Options so = SolverOptions(options_, &logger);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, problem_.get(), &summary);
+    if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
+      throw CalibrationFailure("the solve diverged (" + summary.message +
+                               "): check the initial guesses and the noise settings");
+    return summary;
+  }
+
+  // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.
+  void RemoveOutliers(double probability, std::vector<CameraOutliers>* report) {
+    const double gate = -2.0 * std::log(1.0 - probability);  // chi-square, 2 dof
+    for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
+      PreparedCamera& cam = prep_.cameras[c];
+      CameraOutliers o;
+      o.camera = cam.state->name();
+      o.views = static_cast<int>(cam.views.size());
+      o.invalid = cam.invalid;
+      const auto& ids = corner_ids_[c].second;
+      const auto& index = corner_index_[c];
+      o.corners = static_cast<int>(ids.size());
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        double r[2];
+        double cost = 0.0;
+        const bool ok = problem_->EvaluateResidualBlock(ids[i], false, &cost, r, nullptr);
+        if (!ok || r[0] * r[0] + r[1] * r[1] > gate) {
+          cam.removed[index[i]] = true;
+          ++o.removed;
+        }
+      }
+      report->push_back(o);
+    }
+  }
+
+  // How many residuals' segments the current time offsets would change.
+  int CountRebucket() const {
+    int changed = 0;
+    std::size_t i = 0;
+    ForEachSegment([&](int segment) {
+      if (i >= segments_.size() || segments_[i] != segment)
+        ++changed;
+      ++i;
+    });
+    return changed;
+  }
+
+  void Finish(SplineCalibrationResult* out) {
+    FinishResult(*problem_, state_, prior_ids_, corner_ids_, inertial_ids_, options_, log_, out);
+  }
+
+  ceres::Problem& problem() { return *problem_; }
+
+ private:
+  std::int64_t Clamp(std::int64_t t_ns) const {
+    return std::min(std::max(t_ns, spline_.MinTimeNs()), spline_.MaxTimeNs());
+  }
+
+  // The segment of base-clock time t_ns + shift_s (clamped: a sample moved slightly off the
+  // trajectory's ends by its time offset extrapolates its end segment).
+  int SegmentOf(std::int64_t t_ns, double shift_s) const {
+    const KnotTiming& tm = spline_.timing();
+    const double s = (1e-9 * static_cast<double>(t_ns - tm.t0_ns) + shift_s) / tm.dt_s();
+    const int last = spline_.NumSegments() - 1;
+    return std::min(std::max(static_cast<int>(std::floor(s)), 0), last);
+  }
+
+  static int BiasSegmentOf(const BiasSpline& b, std::int64_t t_ns) {
+    const std::int64_t k = (t_ns - b.timing.t0_ns) / b.timing.dt_ns;
+    return static_cast<int>(std::min<std::int64_t>(std::max<std::int64_t>(k, 0), b.NumKnots() - 2));
+  }
+
+  std::vector<double*> TrajBlocks(int segment) {
+    const auto a = spline_.SegmentBlocks(segment);
+    return std::vector<double*>(a.begin(), a.end());
+  }
+
+  static std::vector<double*> BiasBlocks(BiasSpline& b, int segment) {
+    return {b.Knot(segment), b.Knot(segment + 1)};
+  }
+
+  // Visits the trajectory segment of every residual in the order Build adds them.
+  template <class F>
+  void ForEachSegment(F&& f) const {
+    for (const PreparedCamera& cam : prep_.cameras) {
+      const SensorState& s = *cam.state;
+      for (std::size_t i = 0; i < cam.corners.size(); ++i) {
+        if (cam.removed[i])
+          continue;
+        f(SegmentOf(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay));
+      }
+    }
+    for (const PreparedInertial& in : prep_.inertial) {
+      const double shift = in.state->is_base ? 0.0 : in.state->time_offset;
+      for (const ImuSample& z : in.imu)
+        f(SegmentOf(z.t_ns, shift));
+      for (const GyroSample& z : in.gyro)
+        f(SegmentOf(z.t_ns, shift));
+    }
+  }
+
+  void AddCamera(PreparedCamera* cam, bool robust) {
+    SensorState& s = *cam->state;
+    std::vector<ceres::ResidualBlockId> ids;
+    std::vector<std::size_t> index;
+    ceres::LossFunction* loss = nullptr;
+    for (std::size_t i = 0; i < cam->corners.size(); ++i) {
+      if (cam->removed[i])
+        continue;
+      const int seg =
+          SegmentOf(cam->stamps[i], s.time_offset + cam->corners[i].uv.y() * s.line_delay);
+      segments_.push_back(seg);
+      const SegmentClock clock = SegmentClock::At(cam->stamps[i], spline_.timing(), seg);
+      typename CornerResidual<N, Rep>::Parameters p;
+      p.traj = TrajBlocks(seg);
+      p.q_B_C = s.q_B_S.data();
+      p.t_B_C = s.t_B_S.data();
+      p.time_offset = &s.time_offset;
+      p.line_delay = &s.line_delay;
+      p.params = s.camera->mutable_params();
+      ceres::CostFunction* cost =
+          MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(), cam->corners[i], clock);
+      if (robust)
+        loss = new ceres::HuberLoss(options_.huber_threshold);
+      ids.push_back(problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p)));
+      index.push_back(i);
+    }
+    corner_ids_.emplace_back(s.name(), std::move(ids));
+    if (corner_index_.size() < prep_.cameras.size())
+      corner_index_.resize(prep_.cameras.size());
+    corner_index_[static_cast<std::size_t>(cam - prep_.cameras.data())] = std::move(index);
+  }
+
+  void AddInertial(PreparedInertial& in) {
+    SensorState& s = *in.state;
+    std::vector<ceres::ResidualBlockId> ids;
+    const InertialNoise& noise = s.config.noise;
+    const double shift = s.is_base ? 0.0 : s.time_offset;
+    for (const ImuSample& z : in.imu) {
+      const int seg = SegmentOf(z.t_ns, shift);
+      segments_.push_back(seg);
+      const int bseg = BiasSegmentOf(s.bias_gyro, z.t_ns);
+      ImuSampleSetup setup;
+      setup.layout = s.imu->layout();
+      setup.z.w_m = z.w_m;
+      setup.z.a_m = z.a_m;
+      setup.W = ImuWhitening::Of(noise);
+      setup.clock = SegmentClock::At(z.t_ns, spline_.timing(), seg);
+      setup.bias_clock = SegmentClock::At(z.t_ns, s.bias_gyro.timing, bseg);
+      if (s.is_base) {
+        typename BaseImuResidual<N, Rep, Nb>::Parameters p;
+        p.traj = TrajBlocks(seg);
+        p.g_W = state_.g_W();
+        p.bg = BiasBlocks(s.bias_gyro, bseg);
+        p.ba = BiasBlocks(s.bias_accel, bseg);
+        p.intrinsics = &*s.imu;
+        ids.push_back(
+            problem_->AddResidualBlock(MakeBaseImuResidual<N, Rep, Nb>(options_.analytic, setup),
+                                       nullptr, BaseImuResidual<N, Rep, Nb>::Blocks(p)));
+      } else {
+        typename AuxImuResidual<N, Rep, Nb>::Parameters p;
+        p.traj = TrajBlocks(seg);
+        p.g_W = state_.g_W();
+        p.q_B_S = s.q_B_S.data();
+        p.t_B_S = s.t_B_S.data();
+        p.time_offset = &s.time_offset;
+        p.bg = BiasBlocks(s.bias_gyro, bseg);
+        p.ba = BiasBlocks(s.bias_accel, bseg);
+        p.intrinsics = &*s.imu;
+        ids.push_back(
+            problem_->AddResidualBlock(MakeAuxImuResidual<N, Rep, Nb>(options_.analytic, setup),
+                                       nullptr, AuxImuResidual<N, Rep, Nb>::Blocks(p)));
+      }
+    }
+    for (const GyroSample& z : in.gyro) {
+      const int seg = SegmentOf(z.t_ns, shift);
+      segments_.push_back(seg);
+      const int bseg = BiasSegmentOf(s.bias_gyro, z.t_ns);
+      GyroSampleSetup setup;
+      setup.model = s.gyro->model();
+      setup.w_m = z.w_m;
+      setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
+      setup.clock = SegmentClock::At(z.t_ns, spline_.timing(), seg);
+      setup.bias_clock = SegmentClock::At(z.t_ns, s.bias_gyro.timing, bseg);
+      typename AuxGyroResidual<N, Rep, Nb>::Parameters p;
+      p.traj = TrajBlocks(seg);
+      p.q_B_S = s.q_B_S.data();
+      p.time_offset = &s.time_offset;
+      p.bg = BiasBlocks(s.bias_gyro, bseg);
+      p.intrinsics = &*s.gyro;
+      ids.push_back(
+          problem_->AddResidualBlock(MakeAuxGyroResidual<N, Rep, Nb>(options_.analytic, setup),
+                                     nullptr, AuxGyroResidual<N, Rep, Nb>::Blocks(p)));
+    }
+    // Bias random walks between consecutive knots (these are part of the inertial model, kept
+    // with the sensor's residuals but not in its residual statistics).
+    const double dt_b = s.bias_gyro.timing.dt_s();
+    for (int k = 0; k + 1 < s.bias_gyro.NumKnots(); ++k) {
+      problem_->AddResidualBlock(
+          MakeBiasRandomWalkResidual(options_.analytic, noise.gyroscope_random_walk, dt_b), nullptr,
+          s.bias_gyro.Knot(k), s.bias_gyro.Knot(k + 1));
+    }
+    for (int k = 0; k + 1 < s.bias_accel.NumKnots(); ++k) {
+      problem_->AddResidualBlock(
+          MakeBiasRandomWalkResidual(options_.analytic, noise.accelerometer_random_walk, dt_b),
+          nullptr, s.bias_accel.Knot(k), s.bias_accel.Knot(k + 1));
+    }
+    inertial_ids_.emplace_back(s.name(), std::move(ids));
+  }
+
+  // Priors of `prior_sigma` on the estimated blocks, centred on the input's guesses.
+  void AddPriors() {
+    if (prior_center_.empty()) {
+      for (const ParameterBlockInfo& b : blocks_)
+        prior_center_.emplace_back(b.values, b.values + b.ambient_size);
+    }
+    for (std::size_t i = 0; i < blocks_.size(); ++i) {
+      const ParameterBlockInfo& b = blocks_[i];
+      if (!b.estimated || b.prior_sigma.empty())
+        continue;
+      const std::vector<double>& c = prior_center_[i];
+      const Eigen::VectorXd sigma =
+          Eigen::Map<const Eigen::VectorXd>(b.prior_sigma.data(), b.tangent_size);
+      ceres::CostFunction* cost = nullptr;
+      if (b.left_rotation) {
+        cost = MakeRotationPrior(options_.analytic, Eigen::Quaterniond(c[3], c[0], c[1], c[2]),
+                                 Eigen::Vector3d(sigma));
+      } else {
+        cost = MakeVectorPrior(options_.analytic,
+                               Eigen::Map<const Eigen::VectorXd>(c.data(), b.ambient_size), sigma);
+      }
+      prior_ids_.push_back(problem_->AddResidualBlock(cost, nullptr, b.values));
+    }
+  }
+
+  // --- spline fitting ---------------------------------------------------------------------------
+
+  struct PoseFit {
+    SegmentClock clock;
+    Eigen::Quaterniond q_W_B;
+    Eigen::Vector3d p_W_B;
+    double w_R, w_p;
+    template <typename T>
+    bool operator()(T const* const* k, T* r) const {
+      Se3Kinematics<T> kin;
+      Spline::template EvaluateSegment<T>(k, T(clock.U()), T(clock.inv_dt), 0, nullptr, &kin);
+      const QuatT<T> q(kin.R_W_B);
+      const Vec3T<T> e = LogSO3<T>(QuatT<T>(q_W_B.conjugate().cast<T>() * q));
+      for (int i = 0; i < 3; ++i) {
+        r[i] = e(i) * T(w_R);
+        r[3 + i] = (kin.p_W_B(i) - T(p_W_B(i))) * T(w_p);
+      }
+      return true;
+    }
+  };
+
+  struct RateFit {
+    SegmentClock clock;
+    Eigen::Vector3d w_B;
+    double w;
+    template <typename T>
+    bool operator()(T const* const* k, T* r) const {
+      Se3Kinematics<T> kin;
+      Spline::template EvaluateSegment<T>(k, T(clock.U()), T(clock.inv_dt), 1, nullptr, &kin);
+      for (int i = 0; i < 3; ++i)
+        r[i] = (kin.w_B(i) - T(w_B(i))) * T(w);
+      return true;
+    }
+  };
+
+  template <class F>
+  static void AddFit(ceres::Problem* P, Spline* s, int seg, F* f, int num_residuals) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<F, kAutoDiffStride>(f);
+    for (int b = 0; b < Spline::kNumBlocks; ++b)
+      cost->AddParameterBlock(Spline::AmbientSize(b));
+    cost->SetNumResiduals(num_residuals);
+    const auto blocks = s->SegmentBlocks(seg);
+    P->AddResidualBlock(cost, nullptr, std::vector<double*>(blocks.begin(), blocks.end()));
+  }
+
+  static int SegmentOn(const Spline& s, std::int64_t t_ns) {
+    const std::int64_t k = (t_ns - s.timing().t0_ns) / s.timing().dt_ns;
+    return static_cast<int>(
+        std::min<std::int64_t>(std::max<std::int64_t>(k, 0), s.NumSegments() - 1));
+  }
+
+  // Least-squares fit of `s` to the poses (sigma 1 cm, ~0.6 deg), to a prior spline sampled four
+  // times per knot (sigma 10 cm, ~6 deg: it only fills gaps between frames) and to body rates.
+  void Fit(const std::vector<TimedPose>& poses, const Spline* prior,
+           const std::vector<std::pair<std::int64_t, Eigen::Vector3d>>* rates, Spline* s) {
+    // Knots start at the pose nearest to their centre (or the prior there).
+    std::size_t j = 0;
+    for (int k = 0; k < s->NumKnots(); ++k) {
+      const std::int64_t tc = s->KnotCentreTimeNs(k);
+      Eigen::Quaterniond q;
+      Eigen::Vector3d p;
+      if (prior != nullptr) {
+        const Se3Kinematics<double> kin =
+            prior->Evaluate(std::min(std::max(tc, prior->MinTimeNs()), prior->MaxTimeNs()), 0);
+        q = Eigen::Quaterniond(kin.R_W_B);
+        p = kin.p_W_B;
+      } else {
+        while (j + 1 < poses.size() &&
+               std::llabs(poses[j + 1].t_ns - tc) <= std::llabs(poses[j].t_ns - tc))
+          ++j;
+        q = poses[j].q_W_B;
+        p = poses[j].p_W_B;
+      }
+      s->KnotRotation(k) = q.normalized();
+      s->KnotPosition(k) = p;
+    }
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem P(po);
+    for (int k = 0; k < s->NumKnots(); ++k) {
+      if constexpr (Rep == Se3Representation::kJoint) {
+        P.AddParameterBlock(s->KnotData(k), 7, &se3_right_);
+      } else {
+        P.AddParameterBlock(s->KnotData(k), 4, &so3_right_);
+        P.AddParameterBlock(s->KnotData(k) + 4, 3);
+      }
+    }
+    const auto in_range = [&](std::int64_t t) {
+      return t >= s->MinTimeNs() && t <= s->MaxTimeNs();
+    };
+    for (const TimedPose& pose : poses) {
+      if (!in_range(pose.t_ns))
+        continue;
+      const int seg = SegmentOn(*s, pose.t_ns);
+      AddFit(&P, s, seg,
+             new PoseFit{SegmentClock::At(pose.t_ns, s->timing(), seg), pose.q_W_B, pose.p_W_B,
+                         100.0, 100.0},
+             6);
+    }
+    if (prior != nullptr) {
+      const std::int64_t step = std::max<std::int64_t>(1, s->timing().dt_ns / 4);
+      for (std::int64_t t = s->MinTimeNs(); t <= s->MaxTimeNs(); t += step) {
+        const Se3Kinematics<double> kin =
+            prior->Evaluate(std::min(std::max(t, prior->MinTimeNs()), prior->MaxTimeNs()), 0);
+        const int seg = SegmentOn(*s, t);
+        AddFit(&P, s, seg,
+               new PoseFit{SegmentClock::At(t, s->timing(), seg), Eigen::Quaterniond(kin.R_W_B),
+                           kin.p_W_B, 10.0, 10.0},
+               6);
+      }
+    }
+    if (rates != nullptr) {
+      for (const auto& [t, w] : *rates) {
+        if (!in_range(t))
+          continue;
+        const int seg = SegmentOn(*s, t);
+        AddFit(&P, s, seg, new RateFit{SegmentClock::At(t, s->timing(), seg), w, 20.0}, 3);
+      }
+    }
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.max_num_iterations = 30;
+    so.num_threads = options_.threads;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &P, &summary);
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "  spline fit: %d knots (dt %.3f s), cost %.3e -> %.3e, %d iterations",
+                  s->NumKnots(), s->timing().dt_s(), summary.initial_cost, summary.final_cost,
+                  static_cast<int>(summary.iterations.size()));
+    log_(line);
+  }
+
+  Prepared& prep_;
+  CalibrationState& state_;
+  SplineCalibratorOptions options_;
+  CalibrationLog log_;
+  Spline spline_;
+  std::unique_ptr<ceres::Problem> problem_;
+  std::vector<ParameterBlockInfo> blocks_;
+  std::vector<std::vector<double>> prior_center_;
+  std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> corner_ids_;
+  std::vector<std::vector<std::size_t>> corner_index_;
+  std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
+  std::vector<ceres::ResidualBlockId> prior_ids_;
+  std::vector<int> segments_;
+
+  So3RightManifold so3_right_;
+  Se3RightManifold se3_right_;
+  So3LeftManifold so3_left_;
+  ceres::SphereManifold<3> sphere_;
+};
+
+// The whole pipeline for one spline type (stages 1-4 of spline_calibrator.h).
+template <int N, Se3Representation Rep>
+void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const CalibrationLog& log,
+                 SplineCalibrationResult* out) {
+  using Clock = std::chrono::steady_clock;
+  SplineProblem<N, Rep> sp(prep, options, log);
+  out->knot_spacing_s = prep->knot_spacing_s;
+  out->num_knots = sp.NumKnots();
+  log("[3/6] initialising the trajectory spline");
+  sp.InitializeTrajectory();
+  sp.InitializeGravity();
+  {
+    const Eigen::Vector3d g = prep->state->gravity();
+    char line[120];
+    std::snprintf(line, sizeof line, "  gravity_W initialised to [%.4f, %.4f, %.4f]", g.x(), g.y(),
+                  g.z());
+    log(line);
+  }
+  int iterations = 0;
+  double solve_seconds = 0.0;
+  const auto solve = [&](const char* what) {
+    log(what);
+    const ceres::Solver::Summary s = sp.Solve();
+    iterations += static_cast<int>(s.iterations.size()) - 1;
+    solve_seconds += s.total_time_in_seconds;
+    char line[200];
+    std::snprintf(line, sizeof line, "  %s: cost %.6e -> %.6e, %d iterations, %.2f s",
+                  ceres::TerminationTypeToString(s.termination_type), s.initial_cost, s.final_cost,
+                  static_cast<int>(s.iterations.size()) - 1, s.total_time_in_seconds);
+    log(line);
+    return s;
+  };
+  sp.Build(true);
+  solve("[4/6] robust solve (Huber on the corners)");
+  sp.RemoveOutliers(options.outlier_probability, &out->outliers);
+  for (const CameraOutliers& o : out->outliers) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "  %s: %d views, %d corners, %d outliers removed (chi-square %.1f %% gate), %d "
+                  "not projectable at the guess",
+                  o.camera.c_str(), o.views, o.corners, o.removed,
+                  100.0 * options.outlier_probability, o.invalid);
+    log(line);
+  }
+  sp.Build(false);
+  ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
+  for (int round = 0; round < options.max_rebucket_rounds; ++round) {
+    const int changed = sp.CountRebucket();
+    if (changed == 0)
+      break;
+    log("  " + std::to_string(changed) +
+        " residuals moved to another spline segment with the time offsets: re-bucketed");
+    sp.Build(false);
+    last = solve("  re-solve");
+  }
+  out->iterations = iterations;
+  out->solve_seconds = solve_seconds;
+  out->seconds_per_iteration = iterations > 0 ? solve_seconds / iterations : 0.0;
+  SolverSummary summary;
+  summary.method = "spline";
+  summary.iterations = iterations;
+  summary.final_cost = last.final_cost;
+  summary.seconds = solve_seconds;
+  out->result.solver = summary;
+  log("[6/6] covariance and residuals");
+  const auto t_cov = Clock::now();
+  sp.Finish(out);
+  out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
+}
+
+}  // namespace spline_internal
+}  // namespace ctcal

@@ -1,0 +1,17 @@
+// Instantiations of the pipeline for the joint SE(3) trajectory (one translation unit per
+// representation so that the two compile in parallel).
+#include "spline_problem_impl.h"
+
+namespace ctcal::spline_internal {
+
+template void RunPipeline<4, Se3Representation::kJoint>(Prepared*, const SplineCalibratorOptions&,
+                                                        const CalibrationLog&,
+                                                        SplineCalibrationResult*);
+template void RunPipeline<5, Se3Representation::kJoint>(Prepared*, const SplineCalibratorOptions&,
+                                                        const CalibrationLog&,
+                                                        SplineCalibrationResult*);
+template void RunPipeline<6, Se3Representation::kJoint>(Prepared*, const SplineCalibratorOptions&,
+                                                        const CalibrationLog&,
+                                                        SplineCalibrationResult*);
+
+}  // namespace ctcal::spline_internal

@@ -1,0 +1,162 @@
+// End to end: the continuous-time calibrator on a short simulated recording of the default rig
+// (full scenario, table4 guesses) must recover every estimated parameter within 4 sigma with small
+// sigmas (the shape of basalt's test_spline_opt), and bad input must stop with one message naming
+// the sensor.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/sensors/compare.h"
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/rig_yaml.h"
+
+namespace ctcal {
+namespace {
+
+// Simulates DATA once per process with the CLI (`ctcal simulate`, the same path users take).
+std::string SimulatedData(int seed, double duration) {
+  const std::string dir = ::testing::TempDir() + "/ctcal_spline_" + std::to_string(seed) + "_" +
+                          std::to_string(static_cast<int>(duration));
+  if (!std::filesystem::exists(dir + "/truth.yaml")) {
+    const std::string cmd = std::string(CTCAL_BINARY) + " simulate --scenario full --seed " +
+                            std::to_string(seed) + " --duration " + std::to_string(duration) +
+                            " --perturb table4 --out " + dir + " > /dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  return dir;
+}
+
+CalibrationLog Quiet() {
+  return [](const std::string&) {};
+}
+
+struct Loaded {
+  RigConfig rig;
+  RigConfig truth;
+  std::map<std::string, SensorData> data;
+};
+
+Loaded Load(const std::string& dir) {
+  Loaded l;
+  std::vector<std::string> warnings;
+  l.rig = LoadRig(dir + "/rig.yaml", &warnings);
+  l.truth = LoadRig(dir + "/truth.yaml", &warnings);
+  l.data = LoadDataset(dir, l.rig, &warnings);
+  return l;
+}
+
+TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
+  const Loaded l = Load(SimulatedData(11, 12.0));
+  SplineCalibratorOptions options;
+  options.threads = 2;
+  const SplineCalibrationResult r = CalibrateSpline(l.rig, l.data, options, Quiet());
+
+  const Comparison c = CompareRigs(l.truth, r.result);
+  ASSERT_GT(c.summary.count, 100);
+  EXPECT_EQ(c.summary.undetermined, 0);
+  EXPECT_EQ(c.summary.no_sigma, 0);
+  for (const ComparisonRow& row : c.rows) {
+    ASSERT_TRUE(row.error_over_sigma.has_value()) << row.name;
+    EXPECT_LT(std::abs(*row.error_over_sigma), 4.0)
+        << row.name << ": error " << row.error << ", sigma " << *row.sigma;
+    // Sensible sigmas for 12 s of the default rig: rotations < 0.05 deg, translations < 2 mm,
+    // time offsets < 0.3 ms, focal lengths < 1 px.
+    const std::string& n = row.name;
+    const double s = *row.sigma;
+    EXPECT_GT(s, 0.0) << n;
+    if (row.rotation && n.find("R_B_S") != std::string::npos)
+      EXPECT_LT(s * 180.0 / M_PI, 0.05) << n;
+    if (n.find("t_B_S") != std::string::npos)
+      EXPECT_LT(s, 2e-3) << n;
+    if (n.find("time_offset") != std::string::npos)
+      EXPECT_LT(s, 3e-4) << n;
+    if (n.find("intrinsics[0]") != std::string::npos)
+      EXPECT_LT(s, 1.0) << n;
+  }
+  // Whitened residuals of a consistent fit are ~N(0, 1).
+  for (const auto& [name, res] : r.result.residuals) {
+    ASSERT_TRUE(res.rms_whitened.has_value()) << name;
+    EXPECT_NEAR(*res.rms_whitened, 1.0, 0.1) << name;
+  }
+  ASSERT_TRUE(r.result.solver.has_value());
+  EXPECT_EQ(r.result.solver->method, "spline");
+  EXPECT_GT(r.iterations, 0);
+  // The simulator's corners carry no outliers: the 99.9 % gate removes about 0.1 %.
+  for (const CameraOutliers& o : r.outliers)
+    EXPECT_LT(o.removed, o.corners / 200) << o.camera;
+}
+
+template <class F>
+std::string InputErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const CalibrationInputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SplineCalibrator, CameraThatNeverSeesTheBoardIsNamed) {
+  Loaded l = Load(SimulatedData(12, 4.0));
+  l.data["cam1"].corners.clear();
+  const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
+  EXPECT_NE(what.find("sensors.cam1"), std::string::npos) << what;
+  EXPECT_NE(what.find("never sees the board"), std::string::npos) << what;
+}
+
+TEST(SplineCalibrator, TooFewViewsAreNamed) {
+  Loaded l = Load(SimulatedData(12, 4.0));
+  auto& corners = l.data["cam0"].corners;
+  // Keep the corners of the first 5 frames only.
+  std::size_t end = 0;
+  int frames = 0;
+  while (end < corners.size() && frames < 5) {
+    const std::int64_t t = corners[end].t_ns;
+    while (end < corners.size() && corners[end].t_ns == t)
+      ++end;
+    ++frames;
+  }
+  corners.resize(end);
+  const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
+  EXPECT_NE(what.find("sensors.cam0"), std::string::npos) << what;
+  EXPECT_NE(what.find("too few views"), std::string::npos) << what;
+}
+
+TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
+  Loaded l = Load(SimulatedData(12, 4.0));
+  for (ImuSample& s : l.data["imu1"].imu)
+    s.t_ns += 1000000000000LL;  // 1000 s later
+  const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
+  EXPECT_NE(what.find("sensors.imu1"), std::string::npos) << what;
+  EXPECT_NE(what.find("do not overlap"), std::string::npos) << what;
+}
+
+TEST(SplineCalibrator, CliWritesResultAndKalibrFiles) {
+  const std::string data = SimulatedData(12, 4.0);
+  const std::string out = ::testing::TempDir() + "/ctcal_spline_cli_out";
+  std::filesystem::remove_all(out);
+  const std::string cmd = std::string(CTCAL_BINARY) + " calibrate --rig " + data +
+                          "/rig.yaml --data " + data + " --out " + out +
+                          " --threads 2 --knot-spacing 0.05 > /dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  for (const char* f : {"result.yaml", "camchain-imucam.yaml", "imu.yaml", "log.txt"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  std::vector<std::string> warnings;
+  const RigConfig result = LoadRig(out + "/result.yaml", &warnings);
+  ASSERT_TRUE(result.solver.has_value());
+  EXPECT_TRUE(result.gravity_W.has_value());
+  EXPECT_TRUE(result.sigma_gravity_W.has_value());
+  EXPECT_FALSE(result.Find("cam0")->sigma.empty());
+
+  // Bad usage: one line, exit code 2.
+  const std::string bad = std::string(CTCAL_BINARY) + " calibrate --rig /nonexistent.yaml --data " +
+                          data + " --out " + out + " 2> /dev/null";
+  EXPECT_EQ(WEXITSTATUS(std::system(bad.c_str())), 2);
+}
+
+}  // namespace
+}  // namespace ctcal
