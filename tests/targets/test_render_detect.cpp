@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "ctcal/targets/detector.h"
 #include "ctcal/targets/renderer.h"
@@ -152,6 +153,8 @@ TEST(RenderDetect, RadtanAprilGridCornersWithinATenthOfAPixel) {
     const Eigen::Isometry3d T_W_C = LookAt(p_W, centre, roll);
     const DetectionResult result = detector.Detect(renderer.Render(T_W_C, 7 + views));
     const Errors e = Compare(board, camera, T_W_C, result);
+    std::printf("radtan 752x480 view %d: %d corners, RMS %.3f px, max %.3f px, bias (%.3f, %.3f)\n",
+                views, e.matched, e.rms, e.max, e.mean.x(), e.mean.y());
     EXPECT_GE(e.matched, 100) << "view " << views;
     EXPECT_LE(e.rms, 0.1) << "view " << views;
     EXPECT_LE(e.max, 0.4) << "view " << views;
@@ -172,6 +175,8 @@ TEST(RenderDetect, EquidistantAprilGridCornersWithinATenthOfAPixel) {
   const Eigen::Isometry3d T_W_C = LookAt({0.25, 0.4, 0.45}, {0.33, 0.33, 0.0}, 0.4);
   const DetectionResult result = detector.Detect(renderer.Render(T_W_C, 3));
   const Errors e = Compare(board, camera, T_W_C, result);
+  std::printf("equidistant 512x512: %d corners, RMS %.3f px, max %.3f px\n", e.matched, e.rms,
+              e.max);
   EXPECT_GE(e.matched, 100);
   EXPECT_LE(e.rms, 0.1);
   EXPECT_LT(e.mean.norm(), 0.05);
