@@ -82,7 +82,9 @@ Mat3T<T> RightJacobianSO3(const Vec3T<T>& phi) {
     return Mat3T<T>::Identity() - T(0.5) * Phi + (T(1) / T(6)) * Phi * Phi;
   }
   const T theta = sqrt(theta2);
-  const T a = (T(1) - cos(theta)) / theta2;
+  // (1 - cos t)/t^2 written as 2 (sin(t/2)/t)^2: no cancellation at small angles.
+  const T half_sinc = sin(theta / T(2)) / theta;
+  const T a = T(2) * half_sinc * half_sinc;
   const T b = (theta - sin(theta)) / (theta2 * theta);
   return Mat3T<T>::Identity() - a * Phi + b * Phi * Phi;
 }
