@@ -1,0 +1,31 @@
+// What every coarse-guess initialisation stage shares: the error that names the stage and the
+// sensor, and the sink for the one-line findings each stage logs.
+#pragma once
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace ctcal {
+
+// Thrown by a stage that cannot produce its quantity from the data (too few views, no rotation,
+// an ambiguous correlation peak, ...). what() is "initialisation stage '<stage>', sensor
+// '<sensor>': <reason>", so the user knows which sensor to fix and how.
+class InitError : public std::runtime_error {
+ public:
+  InitError(const std::string& stage, const std::string& sensor, const std::string& reason);
+  const std::string& stage() const { return stage_; }
+  const std::string& sensor() const { return sensor_; }
+
+ private:
+  std::string stage_;
+  std::string sensor_;
+};
+
+// Receives one line per finding (no trailing newline). An empty function logs nothing.
+using InitLog = std::function<void(const std::string&)>;
+
+// Writes "[init] <line>" to stderr: the default sink of every stage.
+void LogInitToStderr(const std::string& line);
+
+}  // namespace ctcal

@@ -1,0 +1,487 @@
+#include <ceres/ceres.h>
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <opencv2/calib3d.hpp>
+
+#include "ctcal/calibrator/init/camera_init.h"
+#include "ctcal/spline/so3.h"
+
+namespace ctcal {
+
+namespace {
+
+double Seconds(std::int64_t t_ns) {
+  return static_cast<double>(t_ns) * 1e-9;
+}
+
+template <typename... Args>
+std::string Format(const char* fmt, Args... args) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof(buffer), fmt, args...);
+  return buffer;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty())
+    return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// Corners grouped by frame, in time order.
+std::vector<std::vector<CornerObservation>> SplitFrames(
+    const std::vector<CornerObservation>& corners) {
+  std::map<std::int64_t, std::vector<CornerObservation>> by_stamp;
+  for (const CornerObservation& c : corners)
+    by_stamp[c.t_ns].push_back(c);
+  std::vector<std::vector<CornerObservation>> frames;
+  for (auto& [stamp, frame] : by_stamp)
+    frames.push_back(std::move(frame));
+  return frames;
+}
+
+// Zhang's two constraints per view on the guess's normalised plane, where the board maps by
+// H ~ diag(k, k, 1) [r1 r2 t] with k = f_true / f_guess (see camera_init.h). With
+// B = diag(1/k^2, 1/k^2, 1): h1^T B h2 = 0 and h1^T B h1 = h2^T B h2, each a * x + b = 0 in
+// x = 1/k^2. Returns k, or 1 when the views do not determine it (fronto-parallel only).
+double ClosedFormFocalScale(const CameraModel& guess, const Board& board,
+                            const std::vector<std::vector<CornerObservation>>& frames,
+                            int* used_views) {
+  double saa = 0.0, sab = 0.0;
+  *used_views = 0;
+  for (const auto& frame : frames) {
+    std::vector<cv::Point2d> object, image;
+    for (const CornerObservation& c : frame) {
+      Eigen::Vector3d ray;
+      if (!guess.Unproject(Eigen::Vector2d(c.u, c.v), &ray) || ray.z() < 0.2)
+        continue;
+      const Eigen::Vector3d& p = board.Corner(c.corner_id);
+      object.emplace_back(p.x(), p.y());
+      image.emplace_back(ray.x() / ray.z(), ray.y() / ray.z());
+    }
+    if (object.size() < 8)
+      continue;
+    const cv::Mat H_cv = cv::findHomography(object, image, cv::RANSAC, 0.01);
+    if (H_cv.empty())
+      continue;
+    Eigen::Matrix3d H;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        H(r, c) = H_cv.at<double>(r, c);
+    H /= H.norm();
+    const double a1 = H(0, 0) * H(0, 1) + H(1, 0) * H(1, 1);
+    const double b1 = H(2, 0) * H(2, 1);
+    const double a2 = H(0, 0) * H(0, 0) + H(1, 0) * H(1, 0) - H(0, 1) * H(0, 1) - H(1, 1) * H(1, 1);
+    const double b2 = H(2, 0) * H(2, 0) - H(2, 1) * H(2, 1);
+    saa += a1 * a1 + a2 * a2;
+    sab += a1 * b1 + a2 * b2;
+    ++*used_views;
+  }
+  if (saa <= 0.0)
+    return 1.0;
+  const double x = -sab / saa;
+  if (!(x > 0.0))
+    return 1.0;
+  const double k = 1.0 / std::sqrt(x);
+  return (k > 0.5 && k < 2.0) ? k : 1.0;
+}
+
+// A corner's reprojection error r = pi(params, R_C_W p_W + t_C_W) - uv, with the camera model's
+// own templated projection (the pose is the board's in the camera, stored as a quaternion
+// x, y, z, w and a translation).
+template <class Model>
+struct CornerReprojection {
+  CornerReprojection(const Eigen::Vector3d& p_W_in, const Eigen::Vector2d& uv_in)
+      : p_W(p_W_in), uv(uv_in) {}
+  template <typename T>
+  bool operator()(const T* params, const T* q, const T* t, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_C_W(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_C_W(t);
+    const Eigen::Matrix<T, 3, 1> p_C = q_C_W * p_W.cast<T>() + t_C_W;
+    Eigen::Matrix<T, 2, 1> uv_hat;
+    if (!Model::template Project<T>(params, p_C, &uv_hat))
+      return false;
+    residual[0] = uv_hat[0] - T(uv[0]);
+    residual[1] = uv_hat[1] - T(uv[1]);
+    return true;
+  }
+  Eigen::Vector3d p_W;
+  Eigen::Vector2d uv;
+};
+
+struct ViewState {
+  Eigen::Quaterniond q_C_W;
+  Eigen::Vector3d t_C_W;
+};
+
+struct CornerRef {
+  int view = 0;
+  Eigen::Vector3d p_W;
+  Eigen::Vector2d uv;
+};
+
+// Projection residual norms of all corners with the given parameters and poses; NaN where the
+// model cannot project.
+std::vector<double> ReprojectionErrors(const CameraModel& camera,
+                                       const std::vector<ViewState>& views,
+                                       const std::vector<CornerRef>& refs) {
+  std::vector<double> errors;
+  errors.reserve(refs.size());
+  for (const CornerRef& c : refs) {
+    const ViewState& v = views[static_cast<std::size_t>(c.view)];
+    Eigen::Vector2d uv;
+    if (!camera.Project(v.q_C_W * c.p_W + v.t_C_W, &uv))
+      errors.push_back(std::numeric_limits<double>::quiet_NaN());
+    else
+      errors.push_back((uv - c.uv).norm());
+  }
+  return errors;
+}
+
+double Rms(const std::vector<double>& errors, const std::vector<char>* keep = nullptr) {
+  double sq = 0.0;
+  int n = 0;
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    if ((keep && !(*keep)[k]) || !std::isfinite(errors[k]))
+      continue;
+    sq += errors[k] * errors[k];
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sq / n) : std::numeric_limits<double>::infinity();
+}
+
+// One refinement: intrinsics (distortion held when !free_distortion) and all poses, corners with
+// keep[k] only, Cauchy loss.
+bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vector<CornerRef>& refs,
+            const std::vector<char>& keep, bool free_distortion,
+            const IntrinsicsInitOptions& options) {
+  Eigen::VectorXd params = camera->params();
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::CauchyLoss loss(options.cauchy_px);
+  for (std::size_t k = 0; k < refs.size(); ++k) {
+    if (!keep[k])
+      continue;
+    ViewState& v = (*views)[static_cast<std::size_t>(refs[k].view)];
+    ceres::CostFunction* cost = VisitCameraModel(camera->type(), [&](auto model) {
+      using Model = decltype(model);
+      return static_cast<ceres::CostFunction*>(
+          new ceres::AutoDiffCostFunction<CornerReprojection<Model>, 2, Model::kNumParams, 4, 3>(
+              new CornerReprojection<Model>(refs[k].p_W, refs[k].uv)));
+    });
+    problem.AddResidualBlock(cost, &loss, params.data(), v.q_C_W.coeffs().data(), v.t_C_W.data());
+  }
+  for (ViewState& v : *views)
+    if (problem.HasParameterBlock(v.q_C_W.coeffs().data()))
+      problem.SetManifold(v.q_C_W.coeffs().data(), new ceres::EigenQuaternionManifold);
+  const int num_intrinsics = camera->NumIntrinsics();
+  if (!free_distortion && camera->NumDistortionCoeffs() > 0) {
+    std::vector<int> fixed;
+    for (int i = num_intrinsics; i < camera->NumParams(); ++i)
+      fixed.push_back(i);
+    problem.SetManifold(params.data(), new ceres::SubsetManifold(camera->NumParams(), fixed));
+  }
+  Eigen::VectorXd lower, upper;
+  camera->ParamBounds(&lower, &upper);
+  for (int i = 0; i < camera->NumParams(); ++i) {
+    if (std::isfinite(lower[i]))
+      problem.SetParameterLowerBound(params.data(), i, lower[i]);
+    if (std::isfinite(upper[i]))
+      problem.SetParameterUpperBound(params.data(), i, upper[i]);
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 2;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  if (!summary.IsSolutionUsable())
+    return false;
+  try {
+    camera->SetParams(params);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const CameraModel& guess,
+                                          const Board& board,
+                                          const std::vector<CornerObservation>& corners,
+                                          const IntrinsicsInitOptions& options,
+                                          const InitLog& log) {
+  constexpr const char* kStage = "camera intrinsics";
+  // Frames with enough corners, thinned evenly to max_views.
+  std::vector<std::vector<CornerObservation>> frames;
+  for (auto& frame : SplitFrames(corners))
+    if (static_cast<int>(frame.size()) >= options.min_corners)
+      frames.push_back(std::move(frame));
+  if (static_cast<int>(frames.size()) < options.min_views)
+    throw InitError(
+        kStage, camera_name,
+        Format("%d frames with >= %d corners (need %d board views)",
+               static_cast<int>(frames.size()), options.min_corners, options.min_views));
+  if (static_cast<int>(frames.size()) > options.max_views) {
+    std::vector<std::vector<CornerObservation>> thinned;
+    for (int i = 0; i < options.max_views; ++i)
+      thinned.push_back(frames[static_cast<std::size_t>(
+          (static_cast<long>(i) * static_cast<long>(frames.size())) / options.max_views)]);
+    frames = std::move(thinned);
+  }
+  std::vector<CornerObservation> selected;
+  for (const auto& frame : frames)
+    selected.insert(selected.end(), frame.begin(), frame.end());
+
+  IntrinsicsInitResult result{guess};
+  // The guess's own fit, for the log.
+  {
+    const std::vector<BoardView> views =
+        EstimateBoardViews(guess, board, selected, options.min_corners);
+    std::map<std::int64_t, const BoardView*> by_stamp;
+    for (const BoardView& v : views)
+      by_stamp[v.t_ns] = &v;
+    double sq = 0.0;
+    int n = 0;
+    for (const CornerObservation& c : selected) {
+      const auto it = by_stamp.find(c.t_ns);
+      Eigen::Vector2d uv;
+      if (it != by_stamp.end() &&
+          guess.Project(it->second->T_C_W * board.Corner(c.corner_id), &uv)) {
+        sq += (uv - Eigen::Vector2d(c.u, c.v)).squaredNorm();
+        ++n;
+      }
+    }
+    result.rms_px_guess = n > 0 ? std::sqrt(sq / n) : std::numeric_limits<double>::infinity();
+  }
+
+  // a. Closed-form focal factor.
+  int zhang_views = 0;
+  result.focal_scale = ClosedFormFocalScale(guess, board, frames, &zhang_views);
+  Eigen::VectorXd params = guess.params();
+  const std::vector<std::string> names = guess.ParamNames();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == "fu" || names[i] == "fv")
+      params[static_cast<long>(i)] *= result.focal_scale;
+  CameraModel camera = guess;
+  camera.SetParams(params);
+
+  // b. Poses by robust PnP with the rescaled model.
+  const std::vector<BoardView> pnp =
+      EstimateBoardViews(camera, board, selected, options.min_corners);
+  if (static_cast<int>(pnp.size()) < options.min_views)
+    throw InitError(
+        kStage, camera_name,
+        Format("PnP found the board in %d of %d frames (need %d)", static_cast<int>(pnp.size()),
+               static_cast<int>(frames.size()), options.min_views));
+  std::map<std::int64_t, int> view_of_stamp;
+  std::vector<ViewState> views;
+  for (const BoardView& v : pnp) {
+    view_of_stamp[v.t_ns] = static_cast<int>(views.size());
+    views.push_back({Eigen::Quaterniond(v.T_C_W.linear()).normalized(), v.T_C_W.translation()});
+  }
+  std::vector<CornerRef> refs;
+  for (const CornerObservation& c : selected) {
+    const auto it = view_of_stamp.find(c.t_ns);
+    if (it != view_of_stamp.end())
+      refs.push_back({it->second, board.Corner(c.corner_id), Eigen::Vector2d(c.u, c.v)});
+  }
+
+  // c. Projection parameters first (distortion held at the guess), then everything, then
+  // everything without the outliers.
+  std::vector<char> keep(refs.size(), 1);
+  if (!Refine(&camera, &views, refs, keep, false, options) ||
+      (options.estimate_distortion && !Refine(&camera, &views, refs, keep, true, options)))
+    throw InitError(kStage, camera_name, "the refinement of the intrinsics failed");
+  const std::vector<double> errors = ReprojectionErrors(camera, views, refs);
+  std::vector<double> finite;
+  for (const double e : errors)
+    if (std::isfinite(e))
+      finite.push_back(e);
+  // The norm of a 2-D Gaussian error has median 1.1774 sigma.
+  const double sigma = Median(finite) / 1.1774;
+  const double gate = std::max(options.outlier_px, 5.0 * sigma);
+  for (std::size_t k = 0; k < refs.size(); ++k)
+    if (!(errors[k] <= gate)) {
+      keep[k] = 0;
+      ++result.outliers;
+    }
+  if (result.outliers > 0 &&
+      !Refine(&camera, &views, refs, keep, options.estimate_distortion, options))
+    throw InitError(kStage, camera_name, "the refinement without outliers failed");
+  result.rms_px = Rms(ReprojectionErrors(camera, views, refs), &keep);
+  result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
+  result.views = static_cast<int>(views.size());
+  result.camera = camera;
+  std::string values;
+  for (int i = 0; i < camera.NumParams(); ++i)
+    values += (i ? " " : "") +
+              Format("%s=%.4g", names[static_cast<std::size_t>(i)].c_str(), camera.params()[i]);
+  result.summary = camera_name +
+                   Format(
+                       ": focal x%.4f (Zhang, %d views), then refined on %d views / %d "
+                       "corners (%d outliers): RMS %.3f px (guess %.2f px); ",
+                       result.focal_scale, zhang_views, result.views, result.corners,
+                       result.outliers, result.rms_px, result.rms_px_guess) +
+                   values;
+  if (log)
+    log(result.summary);
+  return result;
+}
+
+BoardPosesResult InitBoardPoses(const std::string& camera_name, const CameraModel& camera,
+                                const Board& board, const std::vector<CornerObservation>& corners,
+                                int min_corners, int min_views, const InitLog& log) {
+  constexpr const char* kStage = "board poses";
+  BoardPosesResult result;
+  result.views = EstimateBoardViews(camera, board, corners, min_corners);
+  std::vector<std::int64_t> stamps;
+  for (const CornerObservation& c : corners)
+    if (stamps.empty() || stamps.back() != c.t_ns)
+      stamps.push_back(c.t_ns);
+  result.frames = static_cast<int>(stamps.size());
+  if (static_cast<int>(result.views.size()) < min_views)
+    throw InitError(
+        kStage, camera_name,
+        Format("board pose found in %d of %d frames with corners (need %d; frames "
+               "need >= %d corners the camera model can unproject)",
+               static_cast<int>(result.views.size()), result.frames, min_views, min_corners));
+  std::vector<double> rms;
+  for (const BoardView& v : result.views)
+    rms.push_back(v.rms_ray_error);
+  result.median_rms_ray = Median(rms);
+  result.summary = camera_name + Format(": board pose in %d of %d frames, median ray RMS %.2e",
+                                        static_cast<int>(result.views.size()), result.frames,
+                                        result.median_rms_ray);
+  if (log)
+    log(result.summary);
+  return result;
+}
+
+RelativePoseResult InitCameraRelativePose(const std::string& camera_i,
+                                          const std::vector<BoardView>& views_i,
+                                          double time_offset_i, const std::string& camera_j,
+                                          const std::vector<BoardView>& views_j,
+                                          double time_offset_j, const InitLog& log) {
+  constexpr const char* kStage = "camera relative pose";
+  const std::string pair_name = camera_i + "-" + camera_j;
+  std::vector<double> gaps;
+  for (std::size_t k = 1; k < views_j.size(); ++k)
+    gaps.push_back(Seconds(views_j[k].t_ns) - Seconds(views_j[k - 1].t_ns));
+  const double max_gap = 1.5 * Median(gaps);
+  // Samples T_Ci_Cj = T_Ci_W (T_Cj_W at the same base time)^-1.
+  std::vector<Eigen::Quaterniond> q;
+  std::vector<Eigen::Vector3d> t;
+  for (const BoardView& vi : views_i) {
+    // Cj's own clock at the base time of this Ci view.
+    const double t_j = Seconds(vi.t_ns) + time_offset_i - time_offset_j;
+    const auto it =
+        std::upper_bound(views_j.begin(), views_j.end(), t_j,
+                         [](double value, const BoardView& v) { return value < Seconds(v.t_ns); });
+    if (it == views_j.begin() || it == views_j.end())
+      continue;
+    const BoardView& b = *it;
+    const BoardView& a = *(it - 1);
+    const double ta = Seconds(a.t_ns), tb = Seconds(b.t_ns);
+    if (tb - ta > max_gap)
+      continue;
+    const double s = (t_j - ta) / (tb - ta);
+    const Eigen::Quaterniond q_Cj_W =
+        Eigen::Quaterniond(a.T_C_W.linear()).slerp(s, Eigen::Quaterniond(b.T_C_W.linear()));
+    const Eigen::Vector3d t_Cj_W = (1.0 - s) * a.T_C_W.translation() + s * b.T_C_W.translation();
+    const Eigen::Quaterniond q_Ci_W(vi.T_C_W.linear());
+    const Eigen::Quaterniond q_Ci_Cj = (q_Ci_W * q_Cj_W.conjugate()).normalized();
+    q.push_back(q_Ci_Cj);
+    t.push_back(vi.T_C_W.translation() - q_Ci_Cj * t_Cj_W);
+  }
+  const int n = static_cast<int>(q.size());
+  if (n < 3)
+    throw InitError(kStage, pair_name,
+                    Format("%d views of '%s' have a view of '%s' within %.1f ms on each side "
+                           "(need 3)",
+                           n, camera_i.c_str(), camera_j.c_str(), max_gap * 1e3));
+  // Robust start: the sample with the smallest median angle to (up to 50 of) the others.
+  const int stride = std::max(1, n / 50);
+  int best = 0;
+  double best_median = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < n; a += stride) {
+    std::vector<double> d;
+    for (int b = 0; b < n; b += stride)
+      d.push_back(q[static_cast<std::size_t>(a)].angularDistance(q[static_cast<std::size_t>(b)]));
+    const double m = Median(d);
+    if (m < best_median) {
+      best_median = m;
+      best = a;
+    }
+  }
+  Eigen::Quaterniond q_mean = q[static_cast<std::size_t>(best)];
+  std::vector<char> inlier(static_cast<std::size_t>(n), 1);
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    std::vector<double> d(static_cast<std::size_t>(n));
+    for (int k = 0; k < n; ++k)
+      d[static_cast<std::size_t>(k)] = q_mean.angularDistance(q[static_cast<std::size_t>(k)]);
+    const double gate = std::max(3.0 * 1.4826 * Median(d), 1e-4);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int m = 0;
+    for (int k = 0; k < n; ++k) {
+      inlier[static_cast<std::size_t>(k)] = d[static_cast<std::size_t>(k)] <= gate;
+      if (inlier[static_cast<std::size_t>(k)]) {
+        // Geodesic (Karcher) mean step: average of the left tangent vectors.
+        sum += LogSO3<double>((q[static_cast<std::size_t>(k)] * q_mean.conjugate()).normalized());
+        ++m;
+      }
+    }
+    q_mean = (ExpSO3<double>(Eigen::Vector3d(sum / m)) * q_mean).normalized();
+  }
+  Eigen::Vector3d t_med;
+  for (int i = 0; i < 3; ++i) {
+    std::vector<double> c;
+    for (const auto& v : t)
+      c.push_back(v[i]);
+    t_med[i] = Median(c);
+  }
+  std::vector<double> dist;
+  for (const auto& v : t)
+    dist.push_back((v - t_med).norm());
+  const double t_gate = std::max(3.0 * 1.4826 * Median(dist), 1e-4);
+  Eigen::Vector3d t_sum = Eigen::Vector3d::Zero();
+  int inliers = 0;
+  std::vector<double> rot_dev, trans_dev;
+  for (int k = 0; k < n; ++k) {
+    if (!inlier[static_cast<std::size_t>(k)] || dist[static_cast<std::size_t>(k)] > t_gate)
+      continue;
+    t_sum += t[static_cast<std::size_t>(k)];
+    ++inliers;
+  }
+  RelativePoseResult result;
+  result.pairs = n;
+  result.inliers = inliers;
+  result.T_Ci_Cj.linear() = q_mean.toRotationMatrix();
+  result.T_Ci_Cj.translation() = inliers > 0 ? Eigen::Vector3d(t_sum / inliers) : t_med;
+  for (int k = 0; k < n; ++k) {
+    rot_dev.push_back(q_mean.angularDistance(q[static_cast<std::size_t>(k)]));
+    trans_dev.push_back((t[static_cast<std::size_t>(k)] - result.T_Ci_Cj.translation()).norm());
+  }
+  result.rotation_spread_deg = Median(rot_dev) * 180.0 / M_PI;
+  result.translation_spread_m = Median(trans_dev);
+  const Eigen::Vector3d& p = result.T_Ci_Cj.translation();
+  result.summary =
+      pair_name + Format(
+                      ": T_Ci_Cj rotation %.3f deg, translation [%.4f %.4f %.4f] m from %d "
+                      "of %d view pairs (median spread %.3f deg, %.2f mm)",
+                      Eigen::AngleAxisd(q_mean).angle() * 180.0 / M_PI, p.x(), p.y(), p.z(),
+                      inliers, n, result.rotation_spread_deg, result.translation_spread_m * 1e3);
+  if (log)
+    log(result.summary);
+  return result;
+}
+
+}  // namespace ctcal
