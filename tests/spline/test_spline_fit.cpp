@@ -68,13 +68,13 @@ TYPED_TEST(SplineFitTest, PoseFitRecoversTheAnalyticTrajectory) {
   EXPECT_EQ(spline.MinTimeNs(), 0);
   EXPECT_GE(spline.MaxTimeNs(), 6 * kSecond);
   const Errors e = MaxErrors(spline, traj, kSecond / 4);
-  EXPECT_LT(e.rotation, 2e-4);  // rad
-  EXPECT_LT(e.position, 2e-4);  // m
-  EXPECT_LT(e.w, 5e-3);         // rad/s
-  EXPECT_LT(e.v, 5e-3);         // m/s
-  EXPECT_LT(e.alpha, 0.1);      // rad/s^2
-  EXPECT_LT(e.a, 0.1);          // m/s^2
-  EXPECT_LT(e.f, 0.1);          // m/s^2
+  EXPECT_LT(e.rotation, 1e-5);  // rad
+  EXPECT_LT(e.position, 1e-5);  // m
+  EXPECT_LT(e.w, 1e-3);         // rad/s
+  EXPECT_LT(e.v, 1e-3);         // m/s
+  EXPECT_LT(e.alpha, 0.05);     // rad/s^2
+  EXPECT_LT(e.a, 0.05);         // m/s^2
+  EXPECT_LT(e.f, 0.05);         // m/s^2
 }
 
 TYPED_TEST(SplineFitTest, JointSe3PoseFitRecoversTheAnalyticTrajectory) {
@@ -84,13 +84,13 @@ TYPED_TEST(SplineFitTest, JointSe3PoseFitRecoversTheAnalyticTrajectory) {
   const auto spline =
       FitSe3Spline<TypeParam::N, Se3Representation::kJoint>(SamplePoses(traj, 6.0, 100.0), options);
   const Errors e = MaxErrors(spline, traj, kSecond / 4);
-  EXPECT_LT(e.rotation, 2e-4);
-  EXPECT_LT(e.position, 2e-4);
-  EXPECT_LT(e.w, 5e-3);
-  EXPECT_LT(e.v, 5e-3);
-  EXPECT_LT(e.alpha, 0.1);
-  EXPECT_LT(e.a, 0.1);
-  EXPECT_LT(e.f, 0.1);
+  EXPECT_LT(e.rotation, 1e-5);
+  EXPECT_LT(e.position, 1e-5);
+  EXPECT_LT(e.w, 1e-3);
+  EXPECT_LT(e.v, 1e-3);
+  EXPECT_LT(e.alpha, 0.05);
+  EXPECT_LT(e.a, 0.05);
+  EXPECT_LT(e.f, 0.05);
 }
 
 // The two representations interpolate differently between knots but converge to the same
@@ -138,8 +138,8 @@ TYPED_TEST(SplineFitTest, AngularVelocityFitRecoversTheOrientation) {
     rot = std::max(rot, RotationError<double>(spline.Orientation(t), ref.q_W_B()).norm());
     w = std::max(w, (spline.AngularVelocity(t) - ref.w_B).norm());
   }
-  EXPECT_LT(rot, 1e-3);  // rad, accumulated over 5 s from integrated rates
-  EXPECT_LT(w, 5e-3);    // rad/s
+  EXPECT_LT(rot, 1e-4);  // rad, accumulated over 5 s from integrated rates
+  EXPECT_LT(w, 1e-3);    // rad/s
 }
 
 TEST(SplineFitErrors, BadInputThrowsWithAReason) {
