@@ -349,7 +349,45 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
     return n;
   };
   merge(run(gray), &confirmed);
-  if (board_ids(confirmed) < board.NumTags()) {
+  // Extra passes only pay when a missing tag can be in the image: a homography fitted to the
+  // tags found (board plane -> image) predicts where the others are; a partial view whose
+  // missing tags all fall outside the frame is done after one pass.
+  auto missing_tag_in_view = [&]() {
+    std::vector<cv::Point2f> board_xy, image_xy;
+    for (const auto& [id, list] : confirmed) {
+      if (id >= board.NumTags() || list.size() != 1)
+        continue;
+      const std::array<int, 4> ids = board.TagCornerIds(id);
+      for (size_t k = 0; k < 4; ++k) {
+        const Eigen::Vector3d& p = board.Corner(ids[k]);
+        board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+        image_xy.emplace_back(static_cast<float>(list.front().corners[k].x()),
+                              static_cast<float>(list.front().corners[k].y()));
+      }
+    }
+    if (board_xy.size() < 8)
+      return true;  // too little to predict from
+    const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
+    if (H.empty())
+      return true;
+    std::vector<cv::Point2f> centres;
+    for (int id = 0; id < board.NumTags(); ++id) {
+      if (confirmed.count(id))
+        continue;
+      const Eigen::Vector3d c =
+          0.5 * (board.Corner(board.TagCornerIds(id)[0]) + board.Corner(board.TagCornerIds(id)[2]));
+      centres.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+    }
+    if (centres.empty())
+      return false;
+    cv::perspectiveTransform(centres, centres, H);
+    for (const cv::Point2f& c : centres) {
+      if (c.x >= 0.0f && c.y >= 0.0f && c.x < gray.cols && c.y < gray.rows)
+        return true;
+    }
+    return false;
+  };
+  auto add_thinned_seeds = [&] {
     // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
     // pixel on its top and left. Their corners are biased by up to a pixel: they only seed the
     // painting, and are used as detections only if the painted image never gives the tag.
@@ -365,7 +403,7 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
                                       }),
                        thinned_tags.end());
     merge(thinned_tags, &seeds);
-  }
+  };
   const double size = board.config().tag_size;
   const double gap = board.config().tag_spacing * size;
   const double grow = 0.15 * gap;
@@ -375,52 +413,67 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
                                                {0.0f, static_cast<float>(size)}};
   cv::Mat work;
   std::set<int> painted;
-  for (int pass = 0; pass < 4 && board_ids(confirmed) < board.NumTags(); ++pass) {
-    if (work.empty())
-      work = gray.clone();
-    bool painted_new = false;
-    for (const auto* tags : {&confirmed, &seeds}) {
-      for (const auto& [id, list] : *tags) {
-        if (id >= board.NumTags() || list.size() != 1 || !painted.insert(id).second)
-          continue;
-        painted_new = true;
-        const TagDetection& tag = list.front();
-        std::vector<cv::Point2f> image_corners;
-        for (const Eigen::Vector2d& c : tag.corners)
-          image_corners.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
-        const cv::Mat H = cv::getPerspectiveTransform(tag_square, image_corners);
-        // White level: the gaps beside the tag's four edges.
-        std::vector<cv::Point2f> gap_centres = {
-            {static_cast<float>(0.5 * size), static_cast<float>(-0.5 * gap)},
-            {static_cast<float>(size + 0.5 * gap), static_cast<float>(0.5 * size)},
-            {static_cast<float>(0.5 * size), static_cast<float>(size + 0.5 * gap)},
-            {static_cast<float>(-0.5 * gap), static_cast<float>(0.5 * size)}};
-        cv::perspectiveTransform(gap_centres, gap_centres, H);
-        int white = 0;
-        for (const cv::Point2f& p : gap_centres) {
-          const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
-          const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
-          white = std::max(white, static_cast<int>(gray.at<uint8_t>(y, x)));
-        }
-        for (const cv::Point2f& corner : tag_square) {
-          const float x0 = corner.x > 0.0f ? corner.x - static_cast<float>(grow)
-                                           : corner.x - static_cast<float>(gap + grow);
-          const float y0 = corner.y > 0.0f ? corner.y - static_cast<float>(grow)
-                                           : corner.y - static_cast<float>(gap + grow);
-          const float w = static_cast<float>(gap + 2.0 * grow);
-          std::vector<cv::Point2f> square = {
-              {x0, y0}, {x0 + w, y0}, {x0 + w, y0 + w}, {x0, y0 + w}};
-          cv::perspectiveTransform(square, square, H);
-          std::vector<cv::Point> polygon;
-          for (const cv::Point2f& p : square)
-            polygon.emplace_back(static_cast<int>(std::lround(p.x)),
-                                 static_cast<int>(std::lround(p.y)));
-          cv::fillConvexPoly(work, polygon, cv::Scalar(white));
+  auto paint_passes = [&] {
+    for (int pass = 0; pass < 4 && board_ids(confirmed) < board.NumTags() && missing_tag_in_view();
+         ++pass) {
+      if (work.empty())
+        work = gray.clone();
+      bool painted_new = false;
+      for (const auto* tags : {&confirmed, &seeds}) {
+        for (const auto& [id, list] : *tags) {
+          if (id >= board.NumTags() || list.size() != 1 || !painted.insert(id).second)
+            continue;
+          painted_new = true;
+          const TagDetection& tag = list.front();
+          std::vector<cv::Point2f> image_corners;
+          for (const Eigen::Vector2d& c : tag.corners)
+            image_corners.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+          const cv::Mat H = cv::getPerspectiveTransform(tag_square, image_corners);
+          // White level: the gaps beside the tag's four edges.
+          std::vector<cv::Point2f> gap_centres = {
+              {static_cast<float>(0.5 * size), static_cast<float>(-0.5 * gap)},
+              {static_cast<float>(size + 0.5 * gap), static_cast<float>(0.5 * size)},
+              {static_cast<float>(0.5 * size), static_cast<float>(size + 0.5 * gap)},
+              {static_cast<float>(-0.5 * gap), static_cast<float>(0.5 * size)}};
+          cv::perspectiveTransform(gap_centres, gap_centres, H);
+          int white = 0;
+          for (const cv::Point2f& p : gap_centres) {
+            const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
+            const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
+            white = std::max(white, static_cast<int>(gray.at<uint8_t>(y, x)));
+          }
+          for (const cv::Point2f& corner : tag_square) {
+            const float x0 = corner.x > 0.0f ? corner.x - static_cast<float>(grow)
+                                             : corner.x - static_cast<float>(gap + grow);
+            const float y0 = corner.y > 0.0f ? corner.y - static_cast<float>(grow)
+                                             : corner.y - static_cast<float>(gap + grow);
+            const float w = static_cast<float>(gap + 2.0 * grow);
+            std::vector<cv::Point2f> square = {
+                {x0, y0}, {x0 + w, y0}, {x0 + w, y0 + w}, {x0, y0 + w}};
+            cv::perspectiveTransform(square, square, H);
+            std::vector<cv::Point> polygon;
+            for (const cv::Point2f& p : square)
+              polygon.emplace_back(static_cast<int>(std::lround(p.x)),
+                                   static_cast<int>(std::lround(p.y)));
+            cv::fillConvexPoly(work, polygon, cv::Scalar(white));
+          }
         }
       }
+      if (!painted_new || !merge(run(work), &confirmed))
+        break;
     }
-    if (!painted_new || !merge(run(work), &confirmed))
-      break;
+  };
+  // Painting around the tags found first; only if tags that should be in view are still
+  // missing, the thinned copy seeds another round (each is one libapriltag pass, so this order
+  // saves passes on the common images where the first pass found most tags).
+  // When the first pass found less than half the board, bridges are everywhere (fisheye
+  // views): seed first, which the painting then confirms on the untouched image.
+  if (2 * board_ids(confirmed) < board.NumTags() && missing_tag_in_view())
+    add_thinned_seeds();
+  paint_passes();
+  if (seeds.empty() && board_ids(confirmed) < board.NumTags() && missing_tag_in_view()) {
+    add_thinned_seeds();
+    paint_passes();
   }
   for (auto& entry : seeds)
     confirmed.insert(entry);  // only where no confirmed detection exists

@@ -72,11 +72,10 @@ void BoardRenderer::IntersectCornerRow(int corner_row, const Eigen::Isometry3d& 
   }
 }
 
-void BoardRenderer::ShadeRow(int row, const std::vector<Eigen::Vector2d>& xy_top,
+void BoardRenderer::ShadeRow(const std::vector<Eigen::Vector2d>& xy_top,
                              const std::vector<uint8_t>& ink_top,
                              const std::vector<Eigen::Vector2d>& xy_bottom,
                              const std::vector<uint8_t>& ink_bottom, float* out) const {
-  (void)row;
   const float levels[3] = {static_cast<float>(options_.black_level),
                            static_cast<float>(options_.white_level),
                            static_cast<float>(options_.background_level)};
@@ -125,7 +124,7 @@ cv::Mat BoardRenderer::Render(const Eigen::Isometry3d& T_W_C, uint64_t seed) con
   IntersectCornerRow(0, T_W_C, &xy_top, &ink_top);
   for (int v = 0; v < height_; ++v) {
     IntersectCornerRow(v + 1, T_W_C, &xy_bottom, &ink_bottom);
-    ShadeRow(v, xy_top, ink_top, xy_bottom, ink_bottom, radiance.ptr<float>(v));
+    ShadeRow(xy_top, ink_top, xy_bottom, ink_bottom, radiance.ptr<float>(v));
     std::swap(xy_top, xy_bottom);
     std::swap(ink_top, ink_bottom);
   }
@@ -142,7 +141,7 @@ cv::Mat BoardRenderer::Render(const std::function<Eigen::Isometry3d(int row)>& T
     const Eigen::Isometry3d T_W_C = T_W_C_of_row(v);
     IntersectCornerRow(v, T_W_C, &xy_top, &ink_top);
     IntersectCornerRow(v + 1, T_W_C, &xy_bottom, &ink_bottom);
-    ShadeRow(v, xy_top, ink_top, xy_bottom, ink_bottom, radiance.ptr<float>(v));
+    ShadeRow(xy_top, ink_top, xy_bottom, ink_bottom, radiance.ptr<float>(v));
   }
   return Finish(radiance, seed);
 }

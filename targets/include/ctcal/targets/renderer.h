@@ -57,8 +57,8 @@ class BoardRenderer {
   // Board-plane points and inks of one row of pixel corners under one pose.
   void IntersectCornerRow(int corner_row, const Eigen::Isometry3d& T_W_C,
                           std::vector<Eigen::Vector2d>* xy, std::vector<uint8_t>* ink) const;
-  void ShadeRow(int row, const std::vector<Eigen::Vector2d>& xy_top,
-                const std::vector<uint8_t>& ink_top, const std::vector<Eigen::Vector2d>& xy_bottom,
+  void ShadeRow(const std::vector<Eigen::Vector2d>& xy_top, const std::vector<uint8_t>& ink_top,
+                const std::vector<Eigen::Vector2d>& xy_bottom,
                 const std::vector<uint8_t>& ink_bottom, float* out) const;
   cv::Mat Finish(cv::Mat radiance, uint64_t seed) const;
 
