@@ -74,6 +74,10 @@ InertialData SimulateInertial(const SensorConfig& s, std::size_t index, bool is_
   const double phase = is_base ? options.t_begin : phase_rng.Uniform(0.0, dt);
   const std::vector<std::int64_t> stamps = SensorStamps(rate, offset, phase, options.t_begin,
                                                         options.t_begin + options.duration + 1e-12);
+  if (stamps.size() < 2)
+    throw std::invalid_argument("sensors." + s.name +
+                                ": fewer than 2 samples inside the simulated interval (is the "
+                                "duration shorter than two sample periods?)");
 
   const Eigen::Matrix3d R_B_S = is_base ? Eigen::Matrix3d::Identity() : Rotation(s.T_B_S);
   const Eigen::Vector3d t_B_S = is_base ? Eigen::Vector3d::Zero() : Translation(s.T_B_S);
@@ -164,6 +168,10 @@ CameraData SimulateCamera(const SensorConfig& s, std::size_t index, bool is_base
   const std::vector<std::int64_t> stamps =
       SensorStamps(options.camera_rate_hz, offset, phase, options.t_begin,
                    options.t_begin + options.duration - readout + 1e-12);
+  if (stamps.empty())
+    throw std::invalid_argument("sensors." + s.name +
+                                ": no image inside the simulated interval (is the rolling-shutter "
+                                "readout height * line_delay longer than the duration?)");
 
   const Eigen::Matrix3d R_B_C = is_base ? Eigen::Matrix3d::Identity() : Rotation(s.T_B_S);
   const Eigen::Vector3d t_B_C = is_base ? Eigen::Vector3d::Zero() : Translation(s.T_B_S);

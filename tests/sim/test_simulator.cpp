@@ -402,6 +402,14 @@ TEST(Simulator, RejectsWhatItCannotSimulate) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("imu1"), std::string::npos) << e.what();
   }
+  RigConfig late = DefaultRig();
+  late.Find("cam1")->line_delay = 0.01;  // a 5 s readout does not fit into 1 s
+  try {
+    ctcal::sim::Simulate(late, *traj, options);
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cam1"), std::string::npos) << e.what();
+  }
   options.duration = -1.0;
   EXPECT_THROW(ctcal::sim::Simulate(DefaultRig(), *traj, options), std::invalid_argument);
 }
