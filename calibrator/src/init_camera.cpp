@@ -241,7 +241,7 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   for (const auto& frame : frames)
     selected.insert(selected.end(), frame.begin(), frame.end());
 
-  IntrinsicsInitResult result{guess};
+  IntrinsicsInitResult result(guess);
   // The guess's own fit, for the log.
   {
     const std::vector<BoardView> views =

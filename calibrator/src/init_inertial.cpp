@@ -1,4 +1,5 @@
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -125,13 +126,17 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name,
     for (int k = 0; k < n; ++k)
       H += weight[static_cast<std::size_t>(k)] * (w_B[static_cast<std::size_t>(k)] - mean_B) *
            (w_S[static_cast<std::size_t>(k)] - mean_S).transpose();
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    // Dynamic size: GCC 12 misreads the fixed-size SVD's SSE loads as uninitialised.
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(H),
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d U = svd.matrixU();
+    const Eigen::Matrix3d V = svd.matrixV();
     Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-    if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0)
+    if ((U * V.transpose()).determinant() < 0.0)
       S(2, 2) = -1.0;
-    R = svd.matrixU() * S * svd.matrixV().transpose();
+    R = U * S * V.transpose();
     c = mean_B - R * mean_S;
-    result.singular_values = (svd.singularValues() / sw).cwiseSqrt();
+    result.singular_values = (Eigen::Vector3d(svd.singularValues()) / sw).cwiseSqrt();
     for (int k = 0; k < n; ++k) {
       const double e =
           (w_B[static_cast<std::size_t>(k)] - R * w_S[static_cast<std::size_t>(k)] - c).norm();
@@ -177,7 +182,6 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
   std::vector<Eigen::Matrix<double, 3, 6>> A;
   std::vector<Eigen::Vector3d> y;
   const double h = options.diff_half_window;
-  double excitation_sq = 0.0;
   for (const ImuSample& s : sensor) {
     const double t = Seconds(s.t_ns) + time_offset;
     Eigen::Vector3d w_B, a_B, w_minus, w_plus;
@@ -191,7 +195,6 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
     row.rightCols<3>() = -Eigen::Matrix3d::Identity();
     A.push_back(row);
     y.push_back(R_B_S * s.a_m - a_B);
-    excitation_sq += (row.leftCols<3>().transpose() * row.leftCols<3>()).trace() / 3.0;
   }
   const int n = static_cast<int>(A.size());
   if (n < 20)
@@ -239,7 +242,6 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
                     Format("rotation does not excite the lever arm in every direction (%.3f < "
                            "%.3f rad/s^2 on the weakest, t_B_S ~ [%.3f %.3f %.3f] m)",
                            min_excitation, options.min_excitation, x[0], x[1], x[2]));
-  (void)excitation_sq;
   result.summary =
       sensor_name + Format(
                         ": t_B_S [%.4f %.4f %.4f] m (1-sigma [%.4f %.4f %.4f]), accel bias term "

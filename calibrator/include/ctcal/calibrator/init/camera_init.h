@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ctcal/calibrator/init/init_log.h"
@@ -27,6 +28,7 @@ struct IntrinsicsInitOptions {
 };
 
 struct IntrinsicsInitResult {
+  explicit IntrinsicsInitResult(CameraModel model) : camera(std::move(model)) {}
   CameraModel camera;         // the improved model
   int views = 0;              // frames in the refinement
   int corners = 0;            // corners kept
