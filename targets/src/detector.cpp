@@ -381,8 +381,10 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
     if (centres.empty())
       return false;
     cv::perspectiveTransform(centres, centres, H);
+    // The homography ignores lens distortion: a tenth of the image of slack at the borders.
+    const float margin = 0.1f * static_cast<float>(std::min(gray.cols, gray.rows));
     for (const cv::Point2f& c : centres) {
-      if (c.x >= 0.0f && c.y >= 0.0f && c.x < gray.cols && c.y < gray.rows)
+      if (c.x >= -margin && c.y >= -margin && c.x < gray.cols + margin && c.y < gray.rows + margin)
         return true;
     }
     return false;
