@@ -2,12 +2,24 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <charconv>
 #include <fstream>
 #include <set>
 #include <stdexcept>
 
 namespace ctcal {
 namespace {
+
+// The shortest decimal that reads back as the same double: 0.088, not 0.087999999999999995 (which
+// yaml-cpp's fixed 17-digit precision would write).
+std::string Shortest(double v) {
+  char buf[32];
+  const auto result = std::to_chars(buf, buf + sizeof(buf), v);
+  std::string s(buf, result.ptr);
+  if (s.find_first_of(".eE") == std::string::npos)
+    s += ".0";  // stays a float for readers
+  return s;
+}
 
 [[noreturn]] void Fail(const std::string& context, const std::string& what) {
   throw std::runtime_error(context + ": target: " + what);
@@ -96,15 +108,15 @@ void EmitTargetConfig(const TargetConfig& t, YAML::Emitter& out) {
     out << YAML::Key << "target_type" << YAML::Value << "aprilgrid";
     out << YAML::Key << "tagCols" << YAML::Value << t.tag_cols;
     out << YAML::Key << "tagRows" << YAML::Value << t.tag_rows;
-    out << YAML::Key << "tagSize" << YAML::Value << t.tag_size;
-    out << YAML::Key << "tagSpacing" << YAML::Value << t.tag_spacing;
+    out << YAML::Key << "tagSize" << YAML::Value << Shortest(t.tag_size);
+    out << YAML::Key << "tagSpacing" << YAML::Value << Shortest(t.tag_spacing);
     out << YAML::Key << "blackTagBorder" << YAML::Value << t.black_tag_border;
   } else {
     out << YAML::Key << "target_type" << YAML::Value << "checkerboard";
     out << YAML::Key << "targetCols" << YAML::Value << t.target_cols;
     out << YAML::Key << "targetRows" << YAML::Value << t.target_rows;
-    out << YAML::Key << "rowSpacingMeters" << YAML::Value << t.row_spacing_m;
-    out << YAML::Key << "colSpacingMeters" << YAML::Value << t.col_spacing_m;
+    out << YAML::Key << "rowSpacingMeters" << YAML::Value << Shortest(t.row_spacing_m);
+    out << YAML::Key << "colSpacingMeters" << YAML::Value << Shortest(t.col_spacing_m);
   }
   out << YAML::EndMap;
 }
