@@ -1,0 +1,564 @@
+// The camera-only calibration (camera_only_calibrator.h): initialisation from the coarse-guess
+// stages (init/camera_init.h), one bundle adjustment over board poses, extrinsics and intrinsics,
+// outlier removal, and the marginal covariance of the calibration.
+#include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+#include "ctcal/calibrator/init/camera_init.h"
+#include "ctcal/calibrator/marginal_covariance.h"
+#include "ctcal/sensors/camera_model.h"
+#include "ctcal/sensors/parameter_names.h"
+#include "ctcal/spline/so3_manifold.h"
+#include "ctcal/targets/board.h"
+
+namespace ctcal {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// Corner reprojection of camera C in a frame with board pose T_W_B:
+//   p_B = R_W_B^T (p_W - p_W_B),  p_C = R_B_C^T (p_B - p_B_C),  r = (pi(theta, p_C) - uv) / sigma.
+// The corner's stated sigma whitens it, so r ~ N(0, I) for a consistent model. The reference
+// camera gets a constant identity T_B_C (B is its frame). Quaternions are Eigen's x, y, z, w on
+// So3LeftManifold, whose tangent is the SPEC's rotation perturbation: the marginal covariance is
+// then directly the `sigma: R_B_S` of the result.
+template <class Model>
+struct CornerResidual {
+  CornerResidual(const Eigen::Vector3d& p_W, const Eigen::Vector2d& uv, double sigma)
+      : p_W_(p_W), uv_(uv), inv_sigma_(1.0 / sigma) {}
+
+  template <typename T>
+  bool operator()(const T* q_W_B, const T* p_W_B, const T* q_B_C, const T* p_B_C, const T* theta,
+                  T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> R_W_B(q_W_B);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_W_B(p_W_B);
+    const Eigen::Map<const Eigen::Quaternion<T>> R_B_C(q_B_C);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_B_C(p_B_C);
+    const Eigen::Matrix<T, 3, 1> p_B = R_W_B.conjugate() * (p_W_.cast<T>() - t_W_B);
+    const Eigen::Matrix<T, 3, 1> p_C = R_B_C.conjugate() * (p_B - t_B_C);
+    Eigen::Matrix<T, 2, 1> uv;
+    if (!Model::Project(theta, p_C, &uv))
+      return false;
+    residual[0] = (uv(0) - uv_(0)) * inv_sigma_;
+    residual[1] = (uv(1) - uv_(1)) * inv_sigma_;
+    return true;
+  }
+
+  Eigen::Vector3d p_W_;
+  Eigen::Vector2d uv_;
+  double inv_sigma_;
+};
+
+struct PoseBlock {
+  double q[4] = {0, 0, 0, 1};  // x, y, z, w
+  double p[3] = {0, 0, 0};
+};
+
+void SetPose(const Eigen::Isometry3d& T, PoseBlock* block) {
+  const Eigen::Quaterniond q(T.linear());
+  block->q[0] = q.x();
+  block->q[1] = q.y();
+  block->q[2] = q.z();
+  block->q[3] = q.w();
+  for (int i = 0; i < 3; ++i)
+    block->p[i] = T.translation()(i);
+}
+
+Eigen::Isometry3d GetPose(const PoseBlock& block) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(block.q[3], block.q[0], block.q[1], block.q[2])
+                   .normalized()
+                   .toRotationMatrix();
+  T.translation() = Eigen::Vector3d(block.p[0], block.p[1], block.p[2]);
+  return T;
+}
+
+// One corner in the problem: camera, pose block, measurement.
+struct CornerTerm {
+  int camera = 0;
+  int pose = 0;
+  Eigen::Vector3d p_W;
+  Eigen::Vector2d uv;
+  double sigma = 1.0;
+  bool inlier = true;
+};
+
+struct CameraState {
+  const SensorConfig* config = nullptr;
+  CameraModel model;
+  PoseBlock T_B_C;
+  CameraOnlyCameraReport report;
+  std::vector<BoardView> views;
+  explicit CameraState(CameraModel m) : model(std::move(m)) {}
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty())
+    return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// Median angle of the board normals (z_W in the camera) to their mean: how different the views
+// are. Zhang's method needs distinct board orientations; nearly parallel ones trade focal length
+// against distance.
+double ViewSpreadDeg(const std::vector<BoardView>& views) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const BoardView& v : views)
+    mean += v.T_C_W.linear().col(2);
+  if (mean.norm() == 0.0)
+    return 0.0;
+  mean.normalize();
+  std::vector<double> angles;
+  for (const BoardView& v : views)
+    angles.push_back(std::acos(std::clamp(v.T_C_W.linear().col(2).dot(mean), -1.0, 1.0)) / kDeg);
+  return Median(angles);
+}
+
+bool IsPixelParameter(const std::string& symbol) {
+  return symbol == "fu" || symbol == "fv" || symbol == "pu" || symbol == "pv";
+}
+
+}  // namespace
+
+CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
+                                     const std::map<std::string, SensorData>& data,
+                                     const CameraOnlyOptions& options, std::ostream& log) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  if (!rig.IsCameraOnly())
+    throw std::runtime_error("camera-only calibration: the rig has an inertial sensor");
+  const SensorConfig& base = rig.Base();
+  if (base.type != SensorType::kCamera)
+    throw std::runtime_error("camera-only calibration: base_imu '" + rig.base_imu +
+                             "' is not a camera");
+  const Board board(rig.target);
+  CameraOnlyResult result;
+  result.rig = rig;
+  auto warn = [&](const std::string& line) {
+    result.warnings.push_back(line);
+    log << "[camera-only] WARNING: " << line << "\n";
+  };
+  const InitLog init_log = [&log](const std::string& line) { log << "[init] " << line << "\n"; };
+
+  // Cameras, the reference first.
+  std::vector<std::unique_ptr<CameraState>> cams;
+  std::vector<const SensorConfig*> configs{&base};
+  for (const SensorConfig& s : rig.sensors)
+    if (s.name != base.name)
+      configs.push_back(&s);
+  for (const SensorConfig* s : configs) {
+    const auto it = data.find(s->name);
+    if (it == data.end() || !it->second.has_corners)
+      throw std::runtime_error("camera-only calibration: camera '" + s->name +
+                               "' has no corners.csv (run `ctcal detect` on its images first)");
+    CameraModel model =
+        CameraModel::Create(s->camera_model, s->intrinsics, s->distortion_model,
+                            s->distortion_coeffs, Eigen::Vector2i(s->width, s->height));
+    auto state = std::make_unique<CameraState>(std::move(model));
+    state->config = s;
+    if (s->name != base.name)
+      SetPose(Eigen::Isometry3d(s->T_B_S), &state->T_B_C);
+    cams.push_back(std::move(state));
+  }
+
+  // Intrinsics and board poses per camera. The guess is kept unless its PnP reprojection says it
+  // is poor; then the intrinsics come from the board views (stage 1).
+  for (auto& cam : cams) {
+    const std::string& name = cam->config->name;
+    const std::vector<CornerObservation>& corners = data.at(name).corners;
+    std::set<std::int64_t> frames;
+    for (const CornerObservation& c : corners)
+      frames.insert(c.t_ns);
+    cam->report.frames = static_cast<int>(frames.size());
+    const int focal_index = cam->model.NumIntrinsics() - 4;
+    bool reinit = false;
+    if (cam->config->Estimates(EstimateItem::kIntrinsics)) {
+      try {
+        const BoardPosesResult guess = InitBoardPoses(name, cam->model, board, corners,
+                                                      options.min_corners, options.min_views, {});
+        const double rms_px = guess.median_rms_ray * cam->model.params()(focal_index);
+        reinit = rms_px > options.reinit_rms_px;
+        log << "[camera-only] " << name << ": the guessed intrinsics reproject at " << rms_px
+            << " px (median over " << guess.views.size() << " views)"
+            << (reinit ? ": re-initialising them from the board views" : "") << "\n";
+      } catch (const InitError&) {
+        reinit = true;  // no pose with the guess: try the intrinsics stage, which says why
+      }
+    }
+    if (reinit) {
+      IntrinsicsInitOptions init_options;
+      init_options.min_corners = options.min_corners;
+      init_options.min_views = options.min_views;
+      cam->model =
+          InitCameraIntrinsics(name, cam->model, board, corners, init_options, init_log).camera;
+      cam->report.intrinsics_reinitialised = true;
+    }
+    cam->views = InitBoardPoses(name, cam->model, board, corners, options.min_corners,
+                                options.min_views, init_log)
+                     .views;
+    cam->report.view_spread_deg = ViewSpreadDeg(cam->views);
+  }
+
+  // Extrinsics from the shared views (stage 2b): T_B_C = T_Cref_C.
+  for (std::size_t c = 1; c < cams.size(); ++c) {
+    if (!cams[c]->config->Estimates(EstimateItem::kExtrinsics))
+      continue;
+    const RelativePoseResult rel =
+        InitCameraRelativePose(base.name, cams[0]->views, 0.0, cams[c]->config->name,
+                               cams[c]->views, cams[c]->config->time_offset, init_log);
+    SetPose(rel.T_Ci_Cj, &cams[c]->T_B_C);
+  }
+
+  // Reference frames and the pairing rule of SPEC section 7.
+  std::set<std::int64_t> ref_stamps;
+  for (const CornerObservation& c : data.at(base.name).corners)
+    ref_stamps.insert(c.t_ns);
+  for (const ImageEntry& e : data.at(base.name).images)
+    ref_stamps.insert(e.t_ns);
+  std::vector<double> periods;
+  for (auto it = ref_stamps.begin(); std::next(it) != ref_stamps.end(); ++it)
+    periods.push_back(static_cast<double>(*std::next(it) - *it));
+  const double half_period = 0.5 * Median(periods);
+  // A frame's base time: its stamp plus the camera's given (not estimated) time offset, 0 for
+  // hardware-synchronised cameras.
+  auto pose_key = [&](int camera, std::int64_t stamp_ns) -> std::pair<int, std::int64_t> {
+    if (camera == 0)
+      return {0, stamp_ns};
+    const std::int64_t t_ns =
+        stamp_ns + std::llround(cams[static_cast<std::size_t>(camera)]->config->time_offset * 1e9);
+    auto it = ref_stamps.lower_bound(t_ns);
+    std::int64_t best = 0;
+    double best_dt = std::numeric_limits<double>::infinity();
+    if (it != ref_stamps.end()) {
+      best = *it;
+      best_dt = static_cast<double>(*it - t_ns);
+    }
+    if (it != ref_stamps.begin() && static_cast<double>(t_ns - *std::prev(it)) < best_dt) {
+      best = *std::prev(it);
+      best_dt = static_cast<double>(t_ns - best);
+    }
+    if (best_dt <= half_period)
+      return {0, best};
+    return {camera, stamp_ns};  // seen without the reference camera: a pose of its own
+  };
+
+  // Board poses T_W_B: the reference camera's PnP, then the other cameras' for frames the
+  // reference has no pose for.
+  std::map<std::pair<int, std::int64_t>, int> pose_index;
+  std::vector<PoseBlock> poses;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    const Eigen::Isometry3d T_B_C = GetPose(cams[c]->T_B_C);
+    for (const BoardView& v : cams[c]->views) {
+      const auto key = pose_key(static_cast<int>(c), v.t_ns);
+      if (pose_index.count(key))
+        continue;
+      pose_index[key] = static_cast<int>(poses.size());
+      PoseBlock block;
+      SetPose(v.T_C_W.inverse() * T_B_C.inverse(), &block);
+      poses.push_back(block);
+    }
+  }
+  result.poses = static_cast<int>(poses.size());
+
+  std::vector<CornerTerm> terms;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    std::set<std::int64_t> used, dropped;
+    for (const CornerObservation& o : data.at(cams[c]->config->name).corners) {
+      const auto it = pose_index.find(pose_key(static_cast<int>(c), o.t_ns));
+      if (it == pose_index.end()) {
+        dropped.insert(o.t_ns);
+        continue;
+      }
+      used.insert(o.t_ns);
+      CornerTerm term;
+      term.camera = static_cast<int>(c);
+      term.pose = it->second;
+      term.p_W = board.Corner(o.corner_id);
+      term.uv = Eigen::Vector2d(o.u, o.v);
+      term.sigma = o.sigma.value_or(cams[c]->config->pixel_sigma);
+      terms.push_back(term);
+    }
+    cams[c]->report.frames_used = static_cast<int>(used.size());
+    cams[c]->report.frames_dropped = static_cast<int>(dropped.size());
+    if (!dropped.empty())
+      log << "[camera-only] " << cams[c]->config->name << ": " << dropped.size()
+          << " frames dropped (fewer than " << options.min_corners
+          << " corners and no reference pose)\n";
+  }
+
+  // The problem, built twice: robust (Huber) on every corner, then L2 on the inliers.
+  So3LeftManifold so3;
+  const PoseBlock identity_pose;
+  PoseBlock ref_T_B_C = identity_pose;  // constant: B is the reference camera's frame
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::HuberLoss huber(options.huber_whitened);
+  std::vector<ceres::ResidualBlockId> ids;
+  auto build = [&](ceres::Problem& problem, ceres::LossFunction* loss) {
+    ids.assign(terms.size(), nullptr);
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      const CornerTerm& t = terms[i];
+      if (!t.inlier)
+        continue;
+      CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
+      PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
+      PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
+      ceres::CostFunction* cost = VisitCameraModel(cam.model.type(), [&](auto model) {
+        using Model = decltype(model);
+        return static_cast<ceres::CostFunction*>(
+            new ceres::AutoDiffCostFunction<CornerResidual<Model>, 2, 4, 3, 4, 3,
+                                            Model::kNumParams>(
+                new CornerResidual<Model>(t.p_W, t.uv, t.sigma)));
+      });
+      ids[i] = problem.AddResidualBlock(cost, loss, T_W_B.q, T_W_B.p, T_B_C.q, T_B_C.p,
+                                        cam.model.mutable_params());
+    }
+    for (PoseBlock& pose : poses)
+      if (problem.HasParameterBlock(pose.q))
+        problem.SetManifold(pose.q, &so3);
+    for (std::size_t c = 0; c < cams.size(); ++c) {
+      CameraState& cam = *cams[c];
+      PoseBlock& T_B_C = c == 0 ? ref_T_B_C : cam.T_B_C;
+      if (!problem.HasParameterBlock(T_B_C.q))
+        continue;
+      problem.SetManifold(T_B_C.q, &so3);
+      if (c == 0 || !cam.config->Estimates(EstimateItem::kExtrinsics)) {
+        problem.SetParameterBlockConstant(T_B_C.q);
+        problem.SetParameterBlockConstant(T_B_C.p);
+      }
+      double* theta = cam.model.mutable_params();
+      if (!cam.config->Estimates(EstimateItem::kIntrinsics)) {
+        problem.SetParameterBlockConstant(theta);
+        continue;
+      }
+      Eigen::VectorXd lower, upper;
+      cam.model.ParamBounds(&lower, &upper);
+      for (int i = 0; i < cam.model.NumParams(); ++i) {
+        if (std::isfinite(lower(i)))
+          problem.SetParameterLowerBound(theta, i, lower(i));
+        if (std::isfinite(upper(i)))
+          problem.SetParameterUpperBound(theta, i, upper(i));
+      }
+    }
+  };
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = std::max(1, options.num_threads);
+  solver_options.function_tolerance = 1e-10;
+  solver_options.parameter_tolerance = 1e-10;
+  int iterations = 0;
+  auto solve = [&](ceres::Problem& problem, const char* what) {
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    iterations += static_cast<int>(summary.iterations.size());
+    log << "[camera-only] " << what << " solve: " << summary.num_residuals << " residuals, "
+        << summary.iterations.size() << " iterations, cost " << summary.initial_cost << " -> "
+        << summary.final_cost << " (" << summary.message << ")\n";
+    if (!summary.IsSolutionUsable())
+      throw std::runtime_error(std::string("camera-only calibration: the ") + what +
+                               " solve failed: " + summary.message);
+    return summary.final_cost;
+  };
+
+  {
+    ceres::Problem robust(problem_options);
+    build(robust, &huber);
+    solve(robust, "robust");
+    // Outliers per camera against the robust scale of that camera's whitened errors.
+    std::vector<std::vector<double>> norms(cams.size());
+    std::vector<double> norm(terms.size(), 0.0);
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      double cost = 0.0, r[2];
+      if (!robust.EvaluateResidualBlock(ids[i], false, &cost, r, nullptr))
+        throw std::runtime_error("camera-only calibration: a corner of camera '" +
+                                 cams[static_cast<std::size_t>(terms[i].camera)]->config->name +
+                                 "' cannot be projected after the robust solve");
+      norm[i] = std::hypot(r[0], r[1]);
+      norms[static_cast<std::size_t>(terms[i].camera)].push_back(norm[i]);
+    }
+    std::vector<double> threshold(cams.size());
+    for (std::size_t c = 0; c < cams.size(); ++c)
+      threshold[c] = std::max(3.0, options.outlier_robust_sigmas * Median(norms[c]) / 1.1774);
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      const auto c = static_cast<std::size_t>(terms[i].camera);
+      if (norm[i] > threshold[c]) {
+        terms[i].inlier = false;
+        ++cams[c]->report.outliers;
+      }
+    }
+  }
+  for (auto& cam : cams)
+    if (cam->report.outliers > 0)
+      log << "[camera-only] " << cam->config->name << ": " << cam->report.outliers
+          << " outlier corners removed\n";
+
+  ceres::Problem problem(problem_options);
+  build(problem, nullptr);
+  const double final_cost = solve(problem, "final");
+
+  // Residuals per camera, raw px and whitened.
+  std::vector<double> sum_px(cams.size(), 0.0), sum_w(cams.size(), 0.0);
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    if (!terms[i].inlier)
+      continue;
+    double cost = 0.0, r[2];
+    problem.EvaluateResidualBlock(ids[i], false, &cost, r, nullptr);
+    const auto c = static_cast<std::size_t>(terms[i].camera);
+    const double w2 = r[0] * r[0] + r[1] * r[1];
+    sum_w[c] += w2;
+    sum_px[c] += w2 * terms[i].sigma * terms[i].sigma;
+    ++cams[c]->report.corners;
+  }
+
+  // Marginal covariance of the calibration, board poses marginalised.
+  std::vector<CalibrationBlock> calib;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    CameraState& cam = *cams[c];
+    const std::string& name = cam.config->name;
+    if (cam.config->Estimates(EstimateItem::kIntrinsics)) {
+      CalibrationBlock b;
+      b.values = cam.model.mutable_params();
+      const std::vector<std::string> symbols = cam.model.ParamNames();
+      for (int i = 0; i < cam.model.NumParams(); ++i) {
+        const bool intrinsic = i < cam.model.NumIntrinsics();
+        b.names.push_back(ParameterName(name, intrinsic ? "intrinsics" : "distortion_coeffs",
+                                        intrinsic ? i : i - cam.model.NumIntrinsics()));
+        b.unit.push_back(IsPixelParameter(symbols[static_cast<std::size_t>(i)]) ? 1.0 : 1e-3);
+      }
+      calib.push_back(b);
+    }
+    if (c > 0 && cam.config->Estimates(EstimateItem::kExtrinsics)) {
+      CalibrationBlock r, t;
+      r.values = cam.T_B_C.q;
+      t.values = cam.T_B_C.p;
+      for (int i = 0; i < 3; ++i) {
+        r.names.push_back(ParameterName(name, "R_B_S", i));
+        r.unit.push_back(kDeg);
+        t.names.push_back(ParameterName(name, "t_B_S", i));
+        t.unit.push_back(0.01);
+      }
+      calib.push_back(r);
+      calib.push_back(t);
+    }
+  }
+  Observability obs;
+  std::map<std::string, double> sigma_of;
+  if (!calib.empty()) {
+    const MarginalInformation info = ComputeMarginalInformation(problem, calib);
+    const CalibrationCovariance cov = InvertInformation(info);
+    for (std::size_t i = 0; i < info.names.size(); ++i) {
+      sigma_of[info.names[i]] = cov.undetermined[i] ? std::numeric_limits<double>::infinity()
+                                                    : cov.sigma(static_cast<Eigen::Index>(i));
+      if (cov.undetermined[i])
+        obs.unobservable.push_back(info.names[i]);
+    }
+    for (int col : cov.null_directions) {
+      ObservabilityDirection d;
+      d.eigenvalue = cov.scaled_eigenvalues(col);
+      for (std::size_t i = 0; i < info.names.size(); ++i) {
+        const double loading = cov.scaled_eigenvectors(static_cast<Eigen::Index>(i), col);
+        if (std::abs(loading) > 0.1)
+          d.parameters.push_back({info.names[i], loading});
+      }
+      obs.directions.push_back(d);
+    }
+    if (info.nuisance_damping > 0.0)
+      warn("some board poses are not determined by their corners (damping " +
+           std::to_string(info.nuisance_damping) + ")");
+  }
+
+  // Results per camera: values, sigma, weak intrinsics, residuals.
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    CameraState& cam = *cams[c];
+    SensorConfig& out = *result.rig.Find(cam.config->name);
+    out.intrinsics = cam.model.intrinsics();
+    out.distortion_coeffs = cam.model.distortion_coeffs();
+    if (c > 0)
+      out.T_B_S = GetPose(cam.T_B_C).matrix();
+    out.sigma = SigmaBlock{};
+    auto fill = [&](const std::string& key, int n) {
+      std::vector<double> s;
+      for (int i = 0; i < n; ++i) {
+        const auto it = sigma_of.find(ParameterName(out.name, key, i));
+        if (it == sigma_of.end())
+          return;
+        s.push_back(it->second);
+      }
+      if (n > 0)
+        out.sigma.values[key] = s;
+    };
+    fill("intrinsics", cam.model.NumIntrinsics());
+    fill("distortion_coeffs", cam.model.NumDistortionCoeffs());
+    if (c > 0) {
+      fill("R_B_S", 3);
+      fill("t_B_S", 3);
+    }
+    if (cam.config->Estimates(EstimateItem::kIntrinsics)) {
+      const int fi = cam.model.NumIntrinsics() - 4;
+      std::vector<std::string> weak;
+      std::ostringstream why;
+      for (int i = fi; i < fi + 2; ++i) {
+        const std::string n = ParameterName(out.name, "intrinsics", i);
+        const double rel = sigma_of.at(n) / cam.model.params()(i);
+        if (rel > options.weak_focal_relative ||
+            cam.report.view_spread_deg < options.weak_view_spread_deg)
+          weak.push_back(n);
+        if (i == fi)
+          why << "sigma(f)/f = " << 100.0 * rel << " %, ";
+      }
+      why << "board normals spread " << cam.report.view_spread_deg << " deg over "
+          << cam.views.size() << " views";
+      if (!weak.empty()) {
+        for (const std::string& n : weak)
+          if (std::find(obs.weak.begin(), obs.weak.end(), n) == obs.weak.end())
+            obs.weak.push_back(n);
+        warn(out.name + ": the views are too alike to determine the focal length (" + why.str() +
+             "; weak when above " + std::to_string(100.0 * options.weak_focal_relative) +
+             " % or below " + std::to_string(options.weak_view_spread_deg) +
+             " deg): tilt the board more between views");
+      } else {
+        log << "[camera-only] " << out.name << ": intrinsics determined (" << why.str() << ")\n";
+      }
+    }
+    SensorResiduals res;
+    res.count = 2 * cam.report.corners;
+    if (cam.report.corners > 0) {
+      res.rms_px = std::sqrt(sum_px[c] / static_cast<double>(res.count));
+      res.rms_whitened = std::sqrt(sum_w[c] / static_cast<double>(res.count));
+      log << "[camera-only] " << out.name << ": " << cam.report.corners << " corners, RMS "
+          << *res.rms_px << " px, whitened " << *res.rms_whitened << "\n";
+    }
+    result.rig.residuals[out.name] = res;
+    result.cameras[out.name] = cam.report;
+  }
+  for (const std::string& n : obs.unobservable)
+    warn(n + " is not determined by the data (sigma .inf)");
+  result.rig.observability = obs;
+  result.rig.gravity_W.reset();
+  result.rig.sigma_gravity_W.reset();
+  SolverSummary solver;
+  solver.method = "camera_only";
+  solver.iterations = iterations;
+  solver.final_cost = final_cost;
+  solver.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.rig.solver = solver;
+  return result;
+}
+
+}  // namespace ctcal

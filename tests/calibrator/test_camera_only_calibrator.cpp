@@ -1,0 +1,287 @@
+// The camera-only calibrator (SPEC section 7): a simulated stereo rig without IMUs, EuRoC's real
+// cam_april stereo detections, and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
+#include "ctcal/calibrator/init/init_log.h"
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/kalibr_files.h"
+#include "ctcal/sensors/rig_yaml.h"
+#include "ctcal/sim/default_rig.h"
+#include "ctcal/sim/scenario.h"
+#include "ctcal/sim/simulator.h"
+#include "ctcal/spline/so3.h"
+
+namespace ctcal {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// The default rig's two cameras, cam1 expressed in cam0 (B = cam0).
+RigConfig StereoTruth() {
+  RigConfig rig = sim::DefaultRig();
+  rig.sensors.erase(rig.sensors.begin(), rig.sensors.begin() + 3);  // imu0, imu1, gyro0
+  rig.base_imu = "cam0";
+  const Eigen::Matrix4d T_B_C0 = sim::DefaultRig().Find("cam0")->T_B_S;
+  rig.Find("cam1")->T_B_S = T_B_C0.inverse() * rig.Find("cam1")->T_B_S;
+  rig.Find("cam0")->T_B_S.setIdentity();
+  rig.Find("cam0")->time_offset = 0.0;
+  rig.Find("cam1")->time_offset = 0.0;
+  rig.Find("cam0")->estimate = {EstimateItem::kIntrinsics};
+  rig.Find("cam1")->estimate = {EstimateItem::kIntrinsics, EstimateItem::kExtrinsics};
+  return rig;
+}
+
+std::map<std::string, SensorData> ToSensorData(const sim::SimulatedDataset& sim) {
+  std::map<std::string, SensorData> data;
+  for (const sim::CameraData& cam : sim.cameras) {
+    SensorData& d = data[cam.sensor];
+    d.has_corners = true;
+    for (const sim::SimulatedCorner& c : cam.corners)
+      d.corners.push_back({c.t_ns, c.corner_id, c.uv.x(), c.uv.y(), c.sigma});
+  }
+  return data;
+}
+
+const sim::CameraData& Camera(const sim::SimulatedDataset& sim, const std::string& name) {
+  for (const sim::CameraData& cam : sim.cameras)
+    if (cam.sensor == name)
+      return cam;
+  throw std::logic_error("no camera " + name);
+}
+
+// The simulator starts every non-base camera at a random phase. A camera-only rig is
+// synchronised, so cam1's time offset is chosen to put its exposures at cam0's: a short first run
+// reveals the phase (it depends on the seed only).
+sim::SimulatedDataset SimulateSynchronisedStereo(RigConfig* truth, double duration) {
+  const auto motion = sim::MakeTrajectory(sim::Scenario::kFull, sim::SceneFor(truth->target));
+  const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(*truth));
+  sim::SimOptions options;
+  options.seed = 7;
+  options.duration = 0.3;
+  const sim::SimulatedDataset probe = sim::Simulate(*truth, traj, options);
+  const double dt_ns = 1e9 / options.camera_rate_hz;
+  const double diff_ns = static_cast<double>(Camera(probe, "cam0").frames_ns.front() -
+                                             Camera(probe, "cam1").frames_ns.front());
+  truth->Find("cam1")->time_offset = std::remainder(diff_ns, dt_ns) * 1e-9;
+  options.duration = duration;
+  return sim::Simulate(*truth, traj, options);
+}
+
+TEST(CameraOnly, SimulatedStereoRigRecoversIntrinsicsAndExtrinsicsWithinSigma) {
+  RigConfig truth = StereoTruth();
+  const sim::SimulatedDataset sim = SimulateSynchronisedStereo(&truth, 4.0);
+  const std::map<std::string, SensorData> data = ToSensorData(sim);
+
+  // The guess: focal 1 % off, centre 3 px off, half the distortion, cam1 0.6 deg and 8 mm off.
+  RigConfig guess = truth;
+  for (const char* name : {"cam0", "cam1"}) {
+    SensorConfig& s = *guess.Find(name);
+    s.intrinsics[0] *= 1.01;
+    s.intrinsics[1] *= 1.01;
+    s.intrinsics[2] += 3.0;
+    s.intrinsics[3] -= 3.0;
+    for (double& k : s.distortion_coeffs)
+      k *= 0.5;
+  }
+  Eigen::Matrix4d& T = guess.Find("cam1")->T_B_S;
+  T.topLeftCorner<3, 3>() =
+      ExpSO3(Eigen::Vector3d(0.006, -0.006, 0.004)) * T.topLeftCorner<3, 3>().eval();
+  T.topRightCorner<3, 1>() += Eigen::Vector3d(0.005, -0.004, 0.005);
+
+  std::ostringstream log;
+  const CameraOnlyResult result = CalibrateCameraOnly(guess, data, {}, log);
+  std::printf("%s", log.str().c_str());
+  EXPECT_TRUE(result.warnings.empty()) << log.str();
+  ASSERT_TRUE(result.rig.observability.has_value());
+  EXPECT_TRUE(result.rig.observability->weak.empty());
+  EXPECT_TRUE(result.rig.observability->unobservable.empty());
+
+  for (const char* name : {"cam0", "cam1"}) {
+    const SensorConfig& est = *result.rig.Find(name);
+    const SensorConfig& tru = *truth.Find(name);
+    const std::vector<double>* s_k = est.sigma.Find("intrinsics");
+    const std::vector<double>* s_d = est.sigma.Find("distortion_coeffs");
+    ASSERT_TRUE(s_k && s_d) << name;
+    for (std::size_t i = 0; i < tru.intrinsics.size(); ++i) {
+      std::printf("%s intrinsics[%zu]: %.4f truth %.4f sigma %.4f\n", name, i, est.intrinsics[i],
+                  tru.intrinsics[i], (*s_k)[i]);
+      EXPECT_NEAR(est.intrinsics[i], tru.intrinsics[i], 4.0 * (*s_k)[i]) << name << " " << i;
+      // Plausible: thousands of corners at 1 px determine focal and centre to a fraction of a px.
+      EXPECT_GT((*s_k)[i], 0.005) << name << " " << i;
+      EXPECT_LT((*s_k)[i], 1.0) << name << " " << i;
+    }
+    for (std::size_t i = 0; i < tru.distortion_coeffs.size(); ++i)
+      EXPECT_NEAR(est.distortion_coeffs[i], tru.distortion_coeffs[i], 4.0 * (*s_d)[i])
+          << name << " " << i;
+    const SensorResiduals& res = result.rig.residuals.at(name);
+    ASSERT_TRUE(res.rms_whitened.has_value());
+    // Simulated 1 px noise: the whitened RMS is ~1 (the fit absorbs a few degrees of freedom).
+    EXPECT_NEAR(*res.rms_whitened, 1.0, 0.05) << name;
+    EXPECT_EQ(result.cameras.at(name).outliers, 0) << name;
+  }
+
+  const SensorConfig& cam1 = *result.rig.Find("cam1");
+  const Eigen::Matrix3d R_est = cam1.T_B_S.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d R_true = truth.Find("cam1")->T_B_S.topLeftCorner<3, 3>();
+  // Left perturbation, as the sigma is defined: R_est = Exp(d) R_true.
+  const Eigen::Vector3d d_R = LogSO3(Eigen::Matrix3d(R_est * R_true.transpose()));
+  const Eigen::Vector3d d_t =
+      cam1.T_B_S.topRightCorner<3, 1>() - truth.Find("cam1")->T_B_S.topRightCorner<3, 1>();
+  const std::vector<double>& s_R = *cam1.sigma.Find("R_B_S");
+  const std::vector<double>& s_t = *cam1.sigma.Find("t_B_S");
+  for (int i = 0; i < 3; ++i) {
+    std::printf("cam1 R_B_S[%d] error %.5f deg sigma %.5f; t_B_S[%d] error %.3f mm sigma %.3f\n", i,
+                d_R(i) * kRadToDeg, s_R[i] * kRadToDeg, i, d_t(i) * 1e3, s_t[i] * 1e3);
+    EXPECT_LT(std::abs(d_R(i)), 4.0 * s_R[i]) << i;
+    EXPECT_LT(std::abs(d_t(i)), 4.0 * s_t[i]) << i;
+    EXPECT_LT(s_R[i] * kRadToDeg, 0.05) << i;
+    EXPECT_LT(s_t[i], 0.002) << i;
+  }
+
+  // The result saves as a SPEC rig file and Kalibr's camchain.yaml, and reads back.
+  const fs::path out = fs::temp_directory_path() / "ctcal_camera_only_sim";
+  fs::create_directories(out);
+  SaveRig(result.rig, (out / "result.yaml").string());
+  const std::vector<std::string> written = SaveKalibrFiles(result.rig, out.string());
+  EXPECT_TRUE(fs::exists(out / "camchain.yaml"));
+  EXPECT_FALSE(fs::exists(out / "camchain-imucam.yaml"));
+  EXPECT_FALSE(written.empty());
+  const RigConfig reread = LoadRig((out / "result.yaml").string());
+  EXPECT_EQ(*reread.Find("cam1")->sigma.Find("t_B_S"), s_t);
+  fs::remove_all(out);
+}
+
+TEST(CameraOnly, EurocStereoAgreesWithReferenceOrSaysIntrinsicsAreWeak) {
+  const fs::path dir = fs::path(CTCAL_SHARED_DATA_DIR) / "euroc_cam_april";
+  if (!fs::exists(dir / "reference.yaml"))
+    GTEST_SKIP() << "real data absent: " << dir.string();
+  const RigConfig reference = LoadRig((dir / "reference.yaml").string());
+  const std::map<std::string, SensorData> data = LoadDataset(dir.string(), reference);
+
+  // A coarse guess: focal 5 % short, no distortion, cam1 at identity rotation and 10 cm baseline.
+  RigConfig guess = reference;
+  for (SensorConfig& s : guess.sensors) {
+    s.intrinsics[0] *= 0.95;
+    s.intrinsics[1] *= 0.95;
+    s.distortion_coeffs.assign(s.distortion_coeffs.size(), 0.0);
+  }
+  guess.Find("cam1")->T_B_S.setIdentity();
+  guess.Find("cam1")->T_B_S(0, 3) = 0.10;
+
+  std::ostringstream log;
+  const CameraOnlyResult result = CalibrateCameraOnly(guess, data, {}, log);
+  std::printf("%s", log.str().c_str());
+  ASSERT_TRUE(result.rig.observability.has_value());
+  const std::vector<std::string>& weak = result.rig.observability->weak;
+  auto is_weak = [&](const std::string& n) {
+    return std::find(weak.begin(), weak.end(), n) != weak.end();
+  };
+  for (const char* name : {"cam0", "cam1"}) {
+    const SensorConfig& est = *result.rig.Find(name);
+    const SensorConfig& ref = *reference.Find(name);
+    const std::vector<double>& s_k = *est.sigma.Find("intrinsics");
+    const double whitened = *result.rig.residuals.at(name).rms_whitened;
+    for (int i = 0; i < 4; ++i) {
+      const std::string n = std::string(name) + ".intrinsics[" + std::to_string(i) + "]";
+      const double err =
+          est.intrinsics[static_cast<std::size_t>(i)] - ref.intrinsics[static_cast<std::size_t>(i)];
+      std::printf("%s: %.2f reference %.2f (%+.2f) sigma %.2f px (x whitened RMS %.3f: %.2f)%s\n",
+                  n.c_str(), est.intrinsics[static_cast<std::size_t>(i)],
+                  ref.intrinsics[static_cast<std::size_t>(i)], err, s_k[static_cast<size_t>(i)],
+                  whitened, s_k[static_cast<size_t>(i)] * whitened, is_weak(n) ? " WEAK" : "");
+      EXPECT_TRUE(std::abs(err) <= 3.0 * s_k[static_cast<size_t>(i)] || is_weak(n))
+          << n << ": " << err << " px from the reference, sigma " << s_k[static_cast<size_t>(i)];
+    }
+    // Real corners reproject at a fraction of a pixel.
+    EXPECT_LT(*result.rig.residuals.at(name).rms_px, 0.5) << name;
+  }
+  // The EuRoC views are nearly alike: the focal lengths must be flagged.
+  EXPECT_FALSE(weak.empty());
+  EXPECT_FALSE(result.warnings.empty());
+
+  const SensorConfig& cam1 = *result.rig.Find("cam1");
+  const Eigen::Matrix4d T_ref = reference.Find("cam1")->T_B_S;
+  const Eigen::Vector3d d_R = LogSO3(
+      Eigen::Matrix3d(cam1.T_B_S.topLeftCorner<3, 3>() * T_ref.topLeftCorner<3, 3>().transpose()));
+  const Eigen::Vector3d d_t = cam1.T_B_S.topRightCorner<3, 1>() - T_ref.topRightCorner<3, 1>();
+  const std::vector<double>& s_R = *cam1.sigma.Find("R_B_S");
+  const std::vector<double>& s_t = *cam1.sigma.Find("t_B_S");
+  std::printf("baseline %.2f mm (reference %.2f mm); rotation %.4f deg from the reference\n",
+              cam1.T_B_S.topRightCorner<3, 1>().norm() * 1e3,
+              T_ref.topRightCorner<3, 1>().norm() * 1e3, d_R.norm() * kRadToDeg);
+  for (int i = 0; i < 3; ++i)
+    std::printf("cam1 R_B_S[%d] %+.4f deg sigma %.4f; t_B_S[%d] %+.2f mm sigma %.2f\n", i,
+                d_R(i) * kRadToDeg, s_R[static_cast<size_t>(i)] * kRadToDeg, i, d_t(i) * 1e3,
+                s_t[static_cast<size_t>(i)] * 1e3);
+  // The stereo geometry is well determined even from alike views.
+  EXPECT_LT(d_R.norm() * kRadToDeg, 0.3);
+  EXPECT_LT(d_t.norm(), 0.005);
+}
+
+// A stereo dataset small enough for the error tests.
+struct SmallStereo {
+  RigConfig rig = StereoTruth();
+  std::map<std::string, SensorData> data;
+  SmallStereo() {
+    const sim::SimulatedDataset sim = SimulateSynchronisedStereo(&rig, 0.6);
+    data = ToSensorData(sim);
+  }
+};
+
+std::string ErrorOf(const RigConfig& rig, const std::map<std::string, SensorData>& data) {
+  std::ostringstream log;
+  try {
+    CalibrateCameraOnly(rig, data, {}, log);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CameraOnly, BadInputGetsOneClearMessage) {
+  const SmallStereo s;
+  ASSERT_EQ(ErrorOf(s.rig, s.data), "");
+
+  // A camera that never sees the board.
+  auto blind = s.data;
+  blind["cam1"].corners.clear();
+  std::string e = ErrorOf(s.rig, blind);
+  EXPECT_NE(e.find("cam1"), std::string::npos) << e;
+
+  // Too few views: two frames of the reference camera.
+  auto few = s.data;
+  std::vector<CornerObservation> kept;
+  std::set<std::int64_t> frames;
+  for (const CornerObservation& c : few["cam0"].corners) {
+    frames.insert(c.t_ns);
+    if (frames.size() <= 2)
+      kept.push_back(c);
+  }
+  few["cam0"].corners = kept;
+  e = ErrorOf(s.rig, few);
+  EXPECT_NE(e.find("cam0"), std::string::npos) << e;
+  EXPECT_NE(e.find("3"), std::string::npos) << e;
+
+  // No corners.csv: detection has not run.
+  auto undetected = s.data;
+  undetected["cam1"].has_corners = false;
+  undetected["cam1"].corners.clear();
+  e = ErrorOf(s.rig, undetected);
+  EXPECT_NE(e.find("cam1"), std::string::npos) << e;
+  EXPECT_NE(e.find("corners.csv"), std::string::npos) << e;
+
+  // A rig with an IMU is not a camera calibration.
+  RigConfig with_imu = sim::DefaultRig();
+  e = ErrorOf(with_imu, s.data);
+  EXPECT_NE(e.find("inertial"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace ctcal
