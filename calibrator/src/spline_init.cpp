@@ -1,5 +1,6 @@
 #include "ctcal/calibrator/spline_init.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <opencv2/calib3d.hpp>
@@ -8,8 +9,8 @@
 namespace ctcal {
 namespace {
 
-// RANSAC threshold on the normalised plane: ~0.3 deg, several pixels for any lens of the SPEC.
-constexpr double kRansacThreshold = 0.005;
+// Smallest outlier gate on the normalised plane (~0.1 deg, a pixel or more for any lens).
+constexpr double kInlierThreshold = 0.002;
 
 }  // namespace
 
@@ -40,19 +41,31 @@ std::vector<BoardView> EstimateBoardViews(const CameraModel& camera, const Board
       continue;
     const cv::Matx33d K = cv::Matx33d::eye();
     cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    // The board is planar: IPPE gives the pose of a minimal sample, the iterative (Levenberg-
-    // Marquardt) refinement polishes it on all inliers.
-    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 100,
-                            kRansacThreshold, 0.999, inliers, cv::SOLVEPNP_IPPE) ||
-        static_cast<int>(inliers.size()) < min_corners)
+    // The board is planar: IPPE on every corner, Levenberg-Marquardt refinement, then the corners
+    // beyond a robust gate (5 x the median error, at least kInlierThreshold) are dropped and the
+    // pose refined again on the rest.
+    if (!cv::solvePnP(object, image, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_IPPE))
       continue;
+    cv::solvePnP(object, image, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
+    std::vector<cv::Point2d> projected;
+    cv::projectPoints(object, rvec, tvec, K, cv::noArray(), projected);
+    std::vector<double> err(object.size());
+    for (std::size_t k = 0; k < object.size(); ++k)
+      err[k] = std::hypot(projected[k].x - image[k].x, projected[k].y - image[k].y);
+    std::vector<double> sorted = err;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                     sorted.end());
+    const double gate = std::max(kInlierThreshold, 5.0 * sorted[sorted.size() / 2]);
     std::vector<cv::Point3d> obj_in;
     std::vector<cv::Point2d> img_in;
-    for (const int k : inliers) {
-      obj_in.push_back(object[static_cast<std::size_t>(k)]);
-      img_in.push_back(image[static_cast<std::size_t>(k)]);
+    for (std::size_t k = 0; k < object.size(); ++k) {
+      if (err[k] <= gate) {
+        obj_in.push_back(object[k]);
+        img_in.push_back(image[k]);
+      }
     }
+    if (static_cast<int>(obj_in.size()) < min_corners)
+      continue;
     cv::solvePnP(obj_in, img_in, K, cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
     cv::Mat R_cv;
     cv::Rodrigues(rvec, R_cv);

@@ -24,8 +24,8 @@ struct BoardView {
 
 // Board pose of every frame with at least `min_corners` corners whose rays the guessed camera
 // model can unproject: each corner's ray (any camera model) goes on the normalised plane z = 1,
-// then RANSAC PnP with identity K and a refinement on the inliers. Frames whose pose fails (too
-// few inliers, board behind the camera) are skipped.
+// then PnP with identity K (IPPE, refined) and a refinement after a robust outlier gate. Frames
+// whose pose fails (too few inliers, board behind the camera) are skipped.
 std::vector<BoardView> EstimateBoardViews(const CameraModel& camera, const Board& board,
                                           const std::vector<CornerObservation>& corners,
                                           int min_corners);
