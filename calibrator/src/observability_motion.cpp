@@ -70,7 +70,13 @@ Eigen::Vector3d SignFixed(Eigen::Vector3d u) {
 class Tester {
  public:
   Tester(const InertialSeries& s, const MotionOptions& o, double alpha)
-      : s_(s), o_(o), alpha_(alpha), w_(s.w_m), a_(s.a_m) {}
+      : s_(s),
+        o_(o),
+        alpha_(alpha),
+        walk_quantile_(boost::math::quantile(
+            boost::math::complement(boost::math::chi_squared(1.0), 0.5 * alpha))),
+        w_(s.w_m),
+        a_(s.a_m) {}
 
   bool HasAccel() const { return !a_.empty(); }
 
@@ -79,16 +85,15 @@ class Tester {
     const double n = static_cast<double>(i1 - i0);
     const double span = s_.t[i1 - 1] - s_.t[i0];
     const InertialNoise& q = s_.noise;
-    // H0 variance of one sample about the window mean: white noise plus the bias walk (a Wiener
-    // process of density sigma_rw has expected variance sigma_rw^2 T / 6 about its mean over T).
-    const double var_w =
-        std::pow(q.GyroSampleSigma(), 2) + std::pow(q.GyroBiasSigma(span), 2) / 6.0;
+    // Under H0 a component is white noise (sigma_d^2 per sample) plus a bias walk whose spread
+    // about the window mean has its own heavy-tailed law (BiasWalkBound).
+    const Noise w{std::pow(q.GyroSampleSigma(), 2), BiasWalkBound(q.gyroscope_random_walk, span)};
     const Eigen::Matrix3d C_w = w_.Covariance(i0, i1);
     Eigen::Matrix3d C_a = Eigen::Matrix3d::Zero();
-    double var_a = 0.0;
+    Noise a;
     if (HasAccel()) {
       C_a = a_.Covariance(i0, i1);
-      var_a = std::pow(q.AccelSampleSigma(), 2) + std::pow(q.AccelBiasSigma(span), 2) / 6.0;
+      a = {std::pow(q.AccelSampleSigma(), 2), BiasWalkBound(q.accelerometer_random_walk, span)};
     }
     const double kappa2 = o_.axis_coupling * o_.axis_coupling;
     // g-sensitivity leaks the specific force's variation into every gyroscope component.
@@ -96,9 +101,8 @@ class Tester {
 
     if (key <= kWz) {
       const int j = key;
-      const double others = C_w.trace() - C_w(j, j);
-      const double var0 = var_w + kappa2 * others + leak_g;
-      if (!Constant(n - 1.0, (n - 1.0) * C_w(j, j) / var0))
+      const double leak = kappa2 * (C_w.trace() - C_w(j, j)) + leak_g;
+      if (!Constant(n, 1, 0.0, C_w(j, j), w, leak))
         return std::nullopt;
       return Eigen::Vector3d::Unit(j);
     }
@@ -106,9 +110,8 @@ class Tester {
       if (!HasAccel())
         return std::nullopt;
       const int j = key - kAx;
-      const double others = C_a.trace() - C_a(j, j);
-      const double var0 = var_a + kappa2 * others;
-      if (!Constant(n - 1.0, (n - 1.0) * C_a(j, j) / var0))
+      const double leak = kappa2 * (C_a.trace() - C_a(j, j));
+      if (!Constant(n, 1, 0.0, C_a(j, j), a, leak))
         return std::nullopt;
       return Eigen::Vector3d::Unit(j);
     }
@@ -118,12 +121,11 @@ class Tester {
       // Total least squares: the smallest eigenvalue of the covariance is the residual variance
       // about the best plane; fitting its normal costs 2 degrees of freedom.
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C_a);
-      if (!Constant(n - 3.0, (n - 1.0) * eig.eigenvalues()(0) / var_a))
+      if (!Constant(n, 1, 2.0, eig.eigenvalues()(0), a, 0.0))
         return std::nullopt;
       return SignFixed(eig.eigenvectors().col(0));
     }
-    const double var0_w = var_w + leak_g;
-    const bool all_constant = Constant(3.0 * (n - 1.0), (n - 1.0) * C_w.trace() / var0_w);
+    const bool all_constant = Constant(n, 3, 0.0, C_w.trace(), w, 3.0 * leak_g);
     const Eigen::Vector3d mean_w = w_.Mean(i0, i1);
     const bool below_bias = mean_w.norm() <= o_.max_gyro_bias;
     if (key == kNoRot) {
@@ -143,7 +145,7 @@ class Tester {
       // whose direction costs 2 degrees of freedom.
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C_w);
       const double off_line = eig.eigenvalues()(0) + eig.eigenvalues()(1);
-      if (!Constant(2.0 * (n - 1.0) - 2.0, (n - 1.0) * off_line / var0_w))
+      if (!Constant(n, 2, 2.0, off_line, w, 2.0 * leak_g))
         return std::nullopt;
       axis = SignFixed(eig.eigenvectors().col(2));
     }
@@ -152,30 +154,55 @@ class Tester {
     if (!HasAccel())
       return std::nullopt;
     // Planar: u stays fixed in the world, so the specific force along it is constant.
-    const double var0 = var_a + kappa2 * C_a.trace();
     const double along = axis->dot(C_a * *axis);
-    if (!Constant(n - 1.0, (n - 1.0) * along / var0))
+    if (!Constant(n, 1, 0.0, along, a, kappa2 * C_a.trace()))
       return std::nullopt;
     return axis;
   }
 
  private:
-  // Upper-tail chi-square test: true when the statistic does not exceed its 1 - alpha quantile.
-  bool Constant(double dof, double statistic) const {
+  struct Noise {
+    double white = 0.0;  // variance of one sample's white noise
+    double walk = 0.0;   // bound on the bias walk's spread about the window mean (variance)
+  };
+
+  // The spread v = (1/T) integral (b - mean b)^2 of a Wiener process of density sigma over T is,
+  // by its Karhunen-Loeve expansion, sigma^2 T sum_k X_k / (pi k)^2 with X_k ~ chi2(1) (mean
+  // sigma^2 T / 6). It is dominated by k = 1, so at tail probability alpha/2 it is bounded by
+  // the k = 1 term's quantile plus the mean of the rest.
+  double BiasWalkBound(double sigma, double span) const {
+    const double kPi2 = M_PI * M_PI;
+    return sigma * sigma * span * (walk_quantile_ + kPi2 / 6.0 - 1.0) / kPi2;
+  }
+
+  // H0 "constant": `m` components of summed sample variance `variance` over n samples, of
+  // which `fitted` degrees of freedom went into a fitted direction, read as white noise (a
+  // chi-square of (n-1) m - fitted degrees of freedom, scaled by the white variance plus the
+  // leakage) plus at most m bias walks. The two parts share the test's alpha (union bound).
+  bool Constant(double n, int m, double fitted, double variance, const Noise& noise,
+                double leakage) const {
+    const double dof = (n - 1.0) * m - fitted;
     if (dof < 1.0)
       return false;
+    const double white_part = (n - 1.0) * (variance - m * noise.walk);
+    return white_part <= (m * noise.white + leakage) / m * ChiSquareQuantile(dof);
+  }
+
+  double ChiSquareQuantile(double dof) const {
     auto it = quantiles_.find(dof);
     if (it == quantiles_.end()) {
       const boost::math::chi_squared chi2(dof);
-      it = quantiles_.emplace(dof, boost::math::quantile(boost::math::complement(chi2, alpha_)))
+      it = quantiles_
+               .emplace(dof, boost::math::quantile(boost::math::complement(chi2, 0.5 * alpha_)))
                .first;
     }
-    return statistic <= it->second;
+    return it->second;
   }
 
   const InertialSeries& s_;
   const MotionOptions& o_;
   double alpha_;
+  double walk_quantile_;
   RangeMoments w_;
   RangeMoments a_;
   mutable std::map<double, double> quantiles_;
