@@ -147,7 +147,7 @@ TYPED_TEST(CornerResidualTest, AnalyticMatchesAutoDiffAndCentralDifferences) {
             Residual::template MakeAutoDiff<Model>(m, clock));
         testing::ExpectAnalyticMatchesAutoDiffAndNumeric(
             analytic, *autodiff, this->Blocks(first, params.data()), this->Manifolds(),
-            "segment " + std::to_string(first), LineDelayStep());
+            "segment " + std::to_string(first), TestFixture::LineDelayStep());
       }
     });
   }

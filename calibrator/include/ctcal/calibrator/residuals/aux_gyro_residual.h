@@ -59,7 +59,11 @@ class AuxGyroResidual {
     using residual_internal::CheckCount;
     CheckCount("AuxGyroResidual", "trajectory", p.traj.size(), kNumTrajBlocks);
     CheckCount("AuxGyroResidual", "gyro bias", p.bg.size(), Nb);
-    std::vector<double*> blocks(p.traj);
+    // Reserved up front: no reallocation, and GCC 12's -Warray-bounds false positive on
+    // push_back after a copy-construction stays away.
+    std::vector<double*> blocks;
+    blocks.reserve(kNumTrajBlocks + 2 + Nb + 1);
+    blocks.insert(blocks.end(), p.traj.begin(), p.traj.end());
     blocks.insert(blocks.end(), {p.q_B_S, p.time_offset});
     blocks.insert(blocks.end(), p.bg.begin(), p.bg.end());
     if (p.intrinsics->Dw() != nullptr)

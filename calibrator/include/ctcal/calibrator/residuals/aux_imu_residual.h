@@ -62,7 +62,11 @@ class AuxImuResidual {
     CheckCount("AuxImuResidual", "trajectory", p.traj.size(), kNumTrajBlocks);
     CheckCount("AuxImuResidual", "gyro bias", p.bg.size(), Nb);
     CheckCount("AuxImuResidual", "accel bias", p.ba.size(), Nb);
-    std::vector<double*> blocks(p.traj);
+    // Reserved up front: no reallocation, and GCC 12's -Warray-bounds false positive on
+    // push_back after a copy-construction stays away.
+    std::vector<double*> blocks;
+    blocks.reserve(kNumTrajBlocks + 4 + 2 * Nb + 4);
+    blocks.insert(blocks.end(), p.traj.begin(), p.traj.end());
     blocks.insert(blocks.end(), {p.g_W, p.q_B_S, p.t_B_S, p.time_offset});
     blocks.insert(blocks.end(), p.bg.begin(), p.bg.end());
     blocks.insert(blocks.end(), p.ba.begin(), p.ba.end());

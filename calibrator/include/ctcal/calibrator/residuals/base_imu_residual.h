@@ -47,7 +47,11 @@ class BaseImuResidual {
     CheckCount("BaseImuResidual", "trajectory", p.traj.size(), kNumTrajBlocks);
     CheckCount("BaseImuResidual", "gyro bias", p.bg.size(), Nb);
     CheckCount("BaseImuResidual", "accel bias", p.ba.size(), Nb);
-    std::vector<double*> blocks(p.traj);
+    // Reserved up front: no reallocation, and GCC 12's -Warray-bounds false positive on
+    // push_back after a copy-construction stays away.
+    std::vector<double*> blocks;
+    blocks.reserve(kNumTrajBlocks + 1 + 2 * Nb + 4);
+    blocks.insert(blocks.end(), p.traj.begin(), p.traj.end());
     blocks.push_back(p.g_W);
     blocks.insert(blocks.end(), p.bg.begin(), p.bg.end());
     blocks.insert(blocks.end(), p.ba.begin(), p.ba.end());

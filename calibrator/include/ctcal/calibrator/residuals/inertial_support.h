@@ -163,8 +163,8 @@ struct ImuSensorPart {
     if (jacobians == nullptr)
       return;
 
-    const auto minus_W = (-W->Diagonal()).asDiagonal();
-    *J_r_in = minus_W * J_out_in;
+    const Eigen::Matrix<double, 6, 1> minus_w = -W->Diagonal();
+    *J_r_in = minus_w.asDiagonal() * J_out_in;
     for (int i = 0; i < Nb; ++i) {
       if (jacobians[bg_first + i] != nullptr) {
         JacobianMap<6, 3> J_bg(jacobians[bg_first + i]);
@@ -179,13 +179,13 @@ struct ImuSensorPart {
     }
     const auto matrix_block = [&](int slot, const ImuMatrixJacobian& J_out) {
       if (Wanted(jacobians, slot))
-        DynamicJacobian<6>(jacobians[slot], J_out.cols()) = minus_W * J_out;
+        DynamicJacobian<6>(jacobians[slot], J_out.cols()) = minus_w.asDiagonal() * J_out;
     };
     matrix_block(slots->Dw, J_out_Dw);
     matrix_block(slots->Da, J_out_Da);
     matrix_block(slots->Tg, J_out_Tg);
     if (Wanted(jacobians, slots->q_rotation)) {
-      LiftLeftRotation<6>(Eigen::Matrix<double, 6, 3>(minus_W * J_out_rotation),
+      LiftLeftRotation<6>(Eigen::Matrix<double, 6, 3>(minus_w.asDiagonal() * J_out_rotation),
                           p[slots->q_rotation], jacobians[slots->q_rotation]);
     }
   }
