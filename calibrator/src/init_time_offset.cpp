@@ -1,5 +1,9 @@
 #include "ctcal/calibrator/init/time_offset_init.h"
 
+#include <limits>
+
+#include "ctcal/calibrator/init/inertial_init.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -73,7 +77,8 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
     throw InitError(kStage, sensor_name, "the base gyroscope has fewer than 2 samples");
 
   // Gyro biases shift the magnitudes unevenly; a camera's rate has none.
-  const Eigen::Vector3d bias_B = MedianRate(base_rates);
+  const Eigen::Vector3d bias_B =
+      options.remove_median_bias ? MedianRate(base_rates) : Eigen::Vector3d::Zero();
   std::vector<RateSample> base = base_rates;
   for (RateSample& r : base)
     r.w_S -= bias_B;
@@ -81,7 +86,8 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   for (const RateSample& r : sensor_rates)
     if (r.span == 0.0)
       gyro_part.push_back(r);
-  const Eigen::Vector3d bias_S = MedianRate(gyro_part);
+  const Eigen::Vector3d bias_S =
+      options.remove_median_bias ? MedianRate(gyro_part) : Eigen::Vector3d::Zero();
 
   std::vector<double> sensor_t, sensor_span, sensor_mag;
   double sum = 0, sum_sq = 0;
@@ -166,6 +172,38 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   const double denom = ym - 2.0 * y0 + yp;
   const double delta = denom < 0.0 ? std::clamp(0.5 * (ym - yp) / denom, -0.5, 0.5) : 0.0;
   result.time_offset = coarse_lag + (q - fine_half + delta) * options.fine_step;
+  result.correlation_offset = result.time_offset;
+  if (options.refine_half_width > 0.0) {
+    // Magnitudes discard the direction and the correlation lobe of a slow wave is wide, so small
+    // bias and noise distortions move its peak by a millisecond or more. The vector model of
+    // stage 4 (w_B = R_B_S w_S + c, bias term included) is sharper: its residual, minimised
+    // over R_B_S and c, is minimal at the true offset.
+    HandEyeOptions hand_eye;
+    hand_eye.min_pairs = options.min_samples;
+    hand_eye.min_excitation = 0.0;
+    auto cost = [&](double lag) {
+      try {
+        const double rms =
+            InitRotationHandEye(sensor_name, base_rates, sensor_rates, lag, hand_eye, {}).rms_rad_s;
+        return rms * rms;
+      } catch (const InitError&) {
+        return std::numeric_limits<double>::infinity();
+      }
+    };
+    const int m = static_cast<int>(std::round(options.refine_half_width / options.refine_step));
+    std::vector<double> costs;
+    for (int i = -m; i <= m; ++i)
+      costs.push_back(cost(result.time_offset + i * options.refine_step));
+    int b = static_cast<int>(std::min_element(costs.begin(), costs.end()) - costs.begin());
+    if (std::isfinite(costs[static_cast<std::size_t>(b)]) && b > 0 && b < 2 * m) {
+      const double cm = costs[static_cast<std::size_t>(b - 1)];
+      const double c0 = costs[static_cast<std::size_t>(b)];
+      const double cp = costs[static_cast<std::size_t>(b + 1)];
+      const double den = cm - 2.0 * c0 + cp;
+      const double shift = den > 0.0 ? std::clamp(0.5 * (cm - cp) / den, -0.5, 0.5) : 0.0;
+      result.time_offset += (b - m + shift) * options.refine_step;
+    }
+  }
   const Correlation at_peak =
       CorrelateAt(base, sensor_t, sensor_span, sensor_mag, result.time_offset);
   result.peak_correlation = std::max(result.peak_correlation, at_peak.value);
