@@ -20,6 +20,7 @@
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/parameter_names.h"
+#include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/spline/so3_manifold.h"
 #include "ctcal/targets/board.h"
 
@@ -140,6 +141,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   const auto wall_start = std::chrono::steady_clock::now();
   if (!rig.IsCameraOnly())
     throw std::runtime_error("camera-only calibration: the rig has an inertial sensor");
+  ValidateRig(rig, "camera-only calibration");
   const SensorConfig& base = rig.Base();
   if (base.type != SensorType::kCamera)
     throw std::runtime_error("camera-only calibration: base_imu '" + rig.base_imu +
