@@ -252,6 +252,7 @@ std::string ErrorOf(const RigConfig& rig, const std::map<std::string, SensorData
   try {
     CalibrateCameraOnly(rig, data, {}, log);
   } catch (const std::exception& e) {
+    std::printf("error: %s\n", e.what());
     return e.what();
   }
   return "";
