@@ -6,6 +6,8 @@
 #include <cairo-svg.h>
 #include <cairo.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
