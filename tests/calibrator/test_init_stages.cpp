@@ -223,8 +223,9 @@ TEST_F(InitStages, Gravity) {
                 angle / kDeg, r.accel_std);
     // The low-motion window of a continuous wave is not at rest (6 deg measured): only the
     // whole-span mean is held to 0.5 deg.
-    if (method == GravityOptions::Method::kWhole)
+    if (method == GravityOptions::Method::kWhole) {
       EXPECT_LT(angle, 0.5 * kDeg);
+    }
     EXPECT_NEAR(r.g_W.norm(), data_->truth.gravity_magnitude, 1e-9);
   }
 }
