@@ -58,7 +58,8 @@ class PreintegrationFactor {
                                Eigen::Map<const QuatT<T>>(q_i), Eigen::Map<const Vec3T<T>>(p_i),
                                Eigen::Map<const Vec3T<T>>(v_i), Eigen::Map<const QuatT<T>>(q_j),
                                Eigen::Map<const Vec3T<T>>(p_j), Eigen::Map<const Vec3T<T>>(v_j));
-    Eigen::Map<Eigen::Matrix<T, 9, 1>>(residual) = pre_->sqrt_information().cast<T>() * r;
+    Eigen::Map<Eigen::Matrix<T, 9, 1>> out(residual);
+    out = pre_->sqrt_information().cast<T>() * r;
     return true;
   }
 
@@ -103,7 +104,8 @@ class ReintegrationFactor {
                                Eigen::Map<const QuatT<T>>(x[0]), Eigen::Map<const Vec3T<T>>(x[1]),
                                Eigen::Map<const Vec3T<T>>(x[2]), Eigen::Map<const QuatT<T>>(x[5]),
                                Eigen::Map<const Vec3T<T>>(x[6]), Eigen::Map<const Vec3T<T>>(x[7]));
-    Eigen::Map<Eigen::Matrix<T, 9, 1>>(residual) = pre_->sqrt_information().cast<T>() * r;
+    Eigen::Map<Eigen::Matrix<T, 9, 1>> out(residual);
+    out = pre_->sqrt_information().cast<T>() * r;
     return true;
   }
 
