@@ -1,0 +1,302 @@
+// The report data contract and the report: exact CSV round trips, strict readers, the
+// first-page checks, and a full HTML + PDF render of a synthetic calibration folder checked
+// page by page (pdftoppm), section by section and figure by figure, plus a headless Chromium
+// screenshot of the HTML and the `ctcal report` command.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "ctcal/report/report.h"
+#include "ctcal/report/report_data.h"
+#include "report_test_util.h"
+
+namespace ctcal::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+class ReportTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test::MakeTempDir("ctcal_report"); }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string dir_;
+};
+
+TEST_F(ReportTest, DataFilesRoundTripExactly) {
+  std::vector<CornerResidual> c(2);
+  c[0] = {123456789012345, 3, 17, 10.125, 479.5, 0.1, -1.0 / 3.0, 0.7, false};
+  c[1] = {
+      123456789012346, 4, 0, 1e-300, 2.5, std::numeric_limits<double>::infinity(), 0.0, 5.0, true};
+  WriteCornerResiduals(dir_, "cam0", c);
+  const auto rc = ReadCornerResiduals(CornersPath(dir_, "cam0"));
+  ASSERT_EQ(rc.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(rc[i].t_ns, c[i].t_ns);
+    EXPECT_EQ(rc[i].frame, c[i].frame);
+    EXPECT_EQ(rc[i].corner_id, c[i].corner_id);
+    EXPECT_EQ(rc[i].u, c[i].u);
+    EXPECT_EQ(rc[i].v, c[i].v);
+    EXPECT_EQ(rc[i].du, c[i].du);
+    EXPECT_EQ(rc[i].dv, c[i].dv);
+    EXPECT_EQ(rc[i].whitened, c[i].whitened);
+    EXPECT_EQ(rc[i].outlier, c[i].outlier);
+  }
+  const std::vector<InertialSample> g = {{5, {0.1, 0.2, 1.0 / 7.0}, {-3e-9, 4, 5}}};
+  WriteGyroSamples(dir_, "imu0", g);
+  const auto rg = ReadInertialSamples(GyroPath(dir_, "imu0"));
+  ASSERT_EQ(rg.size(), 1u);
+  EXPECT_EQ(rg[0].t_ns, 5);
+  EXPECT_EQ(rg[0].meas, g[0].meas);
+  EXPECT_EQ(rg[0].pred, g[0].pred);
+  BiasTrack b;
+  b.gyro = {{1, {1, 2, 3}, {0.1, 0.2, 0.3}}};
+  b.accel = {{2, {4, 5, 6}, {0.4, 0.5, 1.0 / 3.0}}, {3, {7, 8, 9}, {1, 1, 1}}};
+  WriteBiasTrack(dir_, "imu0", b);
+  const auto rb = ReadBiasTrack(BiasPath(dir_, "imu0"));
+  ASSERT_EQ(rb.gyro.size(), 1u);
+  ASSERT_EQ(rb.accel.size(), 2u);
+  EXPECT_EQ(rb.accel[0].sigma, b.accel[0].sigma);
+  EXPECT_EQ(rb.accel[1].t_ns, 3);
+  PoseSample p;
+  p.t_ns = 9;
+  p.p_W_B = {1.0 / 3.0, 2, 3};
+  p.q_W_B = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
+  WriteTrajectory(dir_, {p});
+  const auto rt = ReadTrajectory(TrajectoryPath(dir_));
+  ASSERT_EQ(rt.size(), 1u);
+  EXPECT_EQ(rt[0].p_W_B, p.p_W_B);
+  EXPECT_EQ(rt[0].q_W_B.coeffs(), p.q_W_B.coeffs());
+  Correlation corr;
+  corr.names = {"cam0.intrinsics[0]", "imu1.t_B_S[2]"};
+  corr.values.resize(2, 2);
+  corr.values << 1, -0.123456789, -0.123456789, 1;
+  WriteCorrelation(dir_, corr);
+  const auto rcorr = ReadCorrelation(CorrelationPath(dir_));
+  EXPECT_EQ(rcorr.names, corr.names);
+  EXPECT_EQ(rcorr.values, corr.values);
+  const RunInfo info = {{"command", "ctcal calibrate --rig a,b"}, {"ceres", "2.1"}};
+  WriteRunInfo(dir_, info);
+  EXPECT_EQ(ReadRunInfo(RunInfoPath(dir_)), info);
+  // Missing files read as empty.
+  EXPECT_TRUE(ReadCornerResiduals(CornersPath(dir_, "cam9")).empty());
+  EXPECT_TRUE(ReadCorrelation(dir_ + "/nope.csv").names.empty());
+}
+
+TEST_F(ReportTest, MalformedDataNamesFileAndLine) {
+  fs::create_directories(ReportDataDir(dir_));
+  const std::string path = CornersPath(dir_, "cam0");
+  std::ofstream(path) << "#t_ns,frame,corner_id,u,v,du,dv,whitened,outlier\n"
+                      << "1,0,0,1,2,3,4,5,0\n"
+                      << "2,0,0,1,2,x3,4,5,0\n";
+  try {
+    ReadCornerResiduals(path);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":3: 'x3' is not a number"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream(path) << "1,0,0,1,2,3,4,5\n";
+  EXPECT_THROW(ReadCornerResiduals(path), std::runtime_error);
+  std::ofstream(BiasPath(dir_, "imu0")) << "1,0,0,0,1,1,1,mag\n";
+  try {
+    ReadBiasTrack(BiasPath(dir_, "imu0"));
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(":1: part must be gyro or accel"), std::string::npos);
+  }
+  std::ofstream(CorrelationPath(dir_)) << "#name,a,b\na,1,0\nc,0,1\n";
+  EXPECT_THROW(ReadCorrelation(CorrelationPath(dir_)), std::runtime_error);
+}
+
+TEST(ReportChecks, CoverageCountsInlierCells) {
+  std::vector<CornerResidual> c;
+  auto at = [&](double u, double v, bool outlier) {
+    CornerResidual r;
+    r.u = u;
+    r.v = v;
+    r.outlier = outlier;
+    c.push_back(r);
+  };
+  at(10, 10, false);    // cell (0, 0) of 4x4 over 100x100
+  at(99, 99, false);    // cell (3, 3)
+  at(50, 10, true);     // outlier: not counted
+  at(1000, 10, false);  // off the image
+  EXPECT_DOUBLE_EQ(Coverage(c, 100, 100, 4), 2.0 / 16.0);
+}
+
+TEST_F(ReportTest, ChecksFollowTheThresholds) {
+  const test::SyntheticOut s = test::MakeSyntheticOut(dir_);
+  const ReportData data = LoadReportData(dir_, {"cam0", "imu0"});
+  const auto checks = EvaluateChecks(s.rig, data);
+  auto find = [&](const std::string& name, const std::string& sensor) {
+    for (const auto& c : checks)
+      if (c.name == name && c.sensor == sensor)
+        return c;
+    ADD_FAILURE() << "no check " << name << " " << sensor;
+    return Check{};
+  };
+  EXPECT_EQ(find("whitened RMS", "cam0").status, Status::kPass);  // 1.05
+  EXPECT_EQ(find("whitened RMS", "imu0").status, Status::kWarn);  // 1.6
+  const Check o = find("outlier fraction", "cam0");
+  EXPECT_EQ(o.status, Status::kPass);  // 15 of 1400
+  EXPECT_NE(o.value.find("of " + std::to_string(s.corners)), std::string::npos);
+  EXPECT_EQ(find("observability", "").status, Status::kWarn);  // one weak parameter
+  RigConfig bad = s.rig;
+  bad.residuals["cam0"].rms_whitened = 0.3;
+  bad.observability->unobservable = {"imu0.Tg[0]"};
+  const auto bad_checks = EvaluateChecks(bad, data);
+  for (const auto& c : bad_checks) {
+    if ((c.name == "whitened RMS" && c.sensor == "cam0") || c.name == "observability") {
+      EXPECT_EQ(c.status, Status::kFail) << c.name;
+    }
+  }
+}
+
+TEST_F(ReportTest, RendersEverySectionAndEveryPdfPageHasContent) {
+  test::MakeSyntheticOut(dir_);
+  ReportOptions opt;
+  opt.ctcal_version = "test";
+  const ReportOutput out = RenderReport(dir_, opt);
+  ASSERT_TRUE(fs::exists(out.html_path));
+  ASSERT_TRUE(fs::exists(out.pdf_path));
+  const std::string html = Slurp(out.html_path);
+  // Self-contained: no external resource.
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_EQ(html.find("src=\"file"), std::string::npos);
+  for (const std::string id :
+       {"sec-summary", "sec-parameters", "sec-kalibr", "sec-trajectory", "sec-imu-imu0",
+        "sec-imu-imu1", "sec-imu-gyro0", "sec-camera-cam0", "sec-histograms", "sec-correlation",
+        "sec-observability", "sec-crosscheck", "sec-config"}) {
+    EXPECT_NE(html.find("<section id=\"" + id + "\">"), std::string::npos) << id;
+  }
+  for (const std::string id :
+       {"fig-summary", "fig-parameters", "fig-kalibr-camchain", "fig-kalibr-imu", "fig-trajectory",
+        "fig-imu0-intervals", "fig-imu0-gyro", "fig-imu0-gyro-error", "fig-imu0-accel",
+        "fig-imu0-accel-error", "fig-imu0-bias", "fig-cam0-residuals", "fig-cam0-image",
+        "fig-cam0-distortion", "fig-histograms", "fig-correlation", "fig-observability",
+        "fig-excitation", "fig-config"}) {
+    EXPECT_NE(html.find("id=\"" + id + "\""), std::string::npos) << id;
+    EXPECT_NE(std::find(out.figure_ids.begin(), out.figure_ids.end(), id), out.figure_ids.end())
+        << id;
+  }
+  // Sensors without data and the absent cross-check are omitted with a note, not drawn empty.
+  for (const std::string id : {"sec-imu-imu1", "sec-imu-gyro0", "sec-crosscheck"}) {
+    const auto at = html.find("<section id=\"" + id + "\">");
+    ASSERT_NE(at, std::string::npos);
+    const auto end = html.find("</section>", at);
+    const std::string sec = html.substr(at, end - at);
+    EXPECT_NE(sec.find("class=\"omitted\""), std::string::npos) << id;
+    EXPECT_EQ(sec.find("<img"), std::string::npos) << id;
+  }
+  // Every inlined image decodes and is not blank.
+  const std::regex img("data:image/png;base64,([A-Za-z0-9+/=]+)");
+  int images = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), img); it != std::sregex_iterator();
+       ++it)
+    ++images;
+  EXPECT_GE(images, 12);
+
+  // The PDF, rasterised page by page.
+  ASSERT_EQ(out.pdf_pages, static_cast<int>(out.figure_ids.size()));
+  const std::string prefix = dir_ + "/page";
+  const std::string cmd = "pdftoppm -r 40 -gray -png " + out.pdf_path + " " + prefix;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  int pages = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    if (e.path().filename().string().rfind("page", 0) != 0)
+      continue;
+    ++pages;
+    const cv::Mat page = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(page.empty()) << e.path();
+    // Below the title band, the page holds a drawing.
+    const cv::Mat body = page(cv::Rect(0, page.rows / 10, page.cols, page.rows * 8 / 10));
+    EXPECT_GT(test::PixelStdDev(body), 8.0) << e.path();
+  }
+  EXPECT_EQ(pages, out.pdf_pages);
+}
+
+TEST_F(ReportTest, CrosscheckTableWhenPresent) {
+  test::MakeSyntheticOut(dir_);
+  std::ofstream(dir_ + "/crosscheck.yaml")
+      << "rows:\n  - {parameter: cam0.time_offset, spline: 0.0101, discrete: 0.0099, "
+         "difference_sigma: 0.4}\n";
+  ReportOptions opt;
+  opt.pdf = false;
+  const ReportOutput out = RenderReport(dir_, opt);
+  const std::string html = Slurp(out.html_path);
+  const auto at = html.find("<section id=\"sec-crosscheck\">");
+  ASSERT_NE(at, std::string::npos);
+  const std::string sec = html.substr(at, html.find("</section>", at) - at);
+  EXPECT_EQ(sec.find("omitted"), std::string::npos);
+  EXPECT_NE(sec.find("<th>difference_sigma</th>"), std::string::npos);
+  EXPECT_NE(sec.find("<td>0.0099</td>"), std::string::npos);
+}
+
+TEST_F(ReportTest, MissingResultIsOneClearError) {
+  try {
+    RenderReport(dir_);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(dir_ + "/result.yaml: not found"), std::string::npos);
+  }
+}
+
+TEST_F(ReportTest, HeadlessChromiumScreenshot) {
+  const std::string chromium = "/usr/bin/chromium";
+  if (!fs::exists(chromium))
+    GTEST_SKIP() << "Debian's chromium is not installed (/usr/bin/chromium absent)";
+  test::MakeSyntheticOut(dir_);
+  ReportOptions opt;
+  opt.pdf = false;
+  const ReportOutput out = RenderReport(dir_, opt);
+  const std::string profile = test::MakeTempDir("ctcal_chromium");
+  const std::string shot = dir_ + "/shot.png";
+  const std::string cmd = chromium +
+                          " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+                          " --disable-background-networking --disable-component-update"
+                          " --disable-sync --user-data-dir=" +
+                          profile + " --window-size=1200,2400 --screenshot=" + shot + " file://" +
+                          out.html_path + " >/dev/null 2>&1";
+  const int rc = std::system(cmd.c_str());
+  fs::remove_all(profile);
+  ASSERT_EQ(rc, 0) << cmd;
+  const cv::Mat img = cv::imread(shot, cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 1200);
+  // The summary table and the first figures are on screen: the page is not blank.
+  EXPECT_GT(test::PixelStdDev(img), 20.0);
+  EXPECT_GT(test::PixelStdDev(img(cv::Rect(0, 1200, 1200, 1200))), 10.0);
+}
+
+TEST_F(ReportTest, CommandLine) {
+  const std::string bin = CTCAL_BINARY;
+  if (!fs::exists(bin))
+    GTEST_SKIP() << "ctcal not built at " << bin;
+  test::MakeSyntheticOut(dir_);
+  EXPECT_EQ(std::system((bin + " report --out " + dir_ + " >/dev/null").c_str()), 0);
+  EXPECT_TRUE(fs::exists(dir_ + "/report.html"));
+  EXPECT_TRUE(fs::exists(dir_ + "/report.pdf"));
+  const std::string err = dir_ + "/err.txt";
+  const int rc = std::system((bin + " report --out " + dir_ + "/nothing 2>" + err).c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 2);
+  const std::string text = Slurp(err);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_NE(text.find("ctcal report: error: "), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace ctcal::report
