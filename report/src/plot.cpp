@@ -421,7 +421,14 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
   if (equal_aspect) {
     // Same units per device unit on both axes: widen the range that is relatively shorter.
     const double sx = (xh - xl) / p.w, sy = (yh - yl) / p.h;
-    if (sx > sy) {
+    const bool fixed = std::isfinite(x_min) && std::isfinite(x_max) && std::isfinite(y_min) &&
+                       std::isfinite(y_max);
+    if (fixed) {  // an image: shrink the plotted area to the image's aspect, never past its edges
+      if (sx > sy)
+        p.h = (yh - yl) / sx;
+      else
+        p.w = (xh - xl) / sy;
+    } else if (sx > sy) {
       const double c = 0.5 * (yl + yh), h = 0.5 * sx * p.h;
       yl = c - h;
       yh = c + h;
