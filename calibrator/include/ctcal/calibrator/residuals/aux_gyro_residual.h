@@ -153,8 +153,8 @@ class AuxGyroResidual {
         LiftTrajectoryJacobian<N, Rep, 3>(J_r_knots, p, jacobians);
       }
       if (jacobians[kQ_B_S] != nullptr) {
-        LiftLeftRotation<3>(Eigen::Matrix3d(J_r_wB * M.transpose() * Hat<double>(kin.w_B)),
-                            p[kQ_B_S], jacobians[kQ_B_S]);
+        LiftLeftRotation<3>(Eigen::Matrix3d(J_r_wB * Hat<double>(kin.w_B)), p[kQ_B_S],
+                            jacobians[kQ_B_S]);
       }
       if (want_time)
         Jacobian<3, 1>(jacobians[kTimeOffset]) = J_r_wB * kin.alpha_B;

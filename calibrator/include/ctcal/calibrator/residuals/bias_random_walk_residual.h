@@ -62,7 +62,7 @@ class BiasRandomWalkResidual {
         residuals[i] = (p[kB1][i] - p[kB0][i]) * weight_;
       if (jacobians == nullptr)
         return true;
-      using residual_internal::JacobianMap;
+      using residual_internal::Jacobian;
       if (jacobians[kB0] != nullptr)
         Jacobian<3, 3>(jacobians[kB0]) = -weight_ * Eigen::Matrix3d::Identity();
       if (jacobians[kB1] != nullptr)
