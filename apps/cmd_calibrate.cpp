@@ -4,17 +4,49 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli_common.h"
 #include "commands.h"
+#include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
 
 namespace ctcal::app {
+
+namespace {
+
+// A rig without IMUs is a camera calibration (SPEC section 7): per-frame board poses instead of a
+// trajectory spline, and Kalibr's camchain.yaml beside the result.
+int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
+                  const std::map<std::string, SensorData>& data, const std::string& out_dir,
+                  const CalibrationLog& log, std::ofstream& log_file) {
+  CameraOnlyResult result;
+  std::ostringstream stages;
+  try {
+    result = CalibrateCameraOnly(rig, data, CameraOnlyOptions(), stages);
+  } catch (const std::exception& e) {
+    log(stages.str());
+    log_file << "error: " << e.what() << '\n';
+    return cli.InputError(e.what());
+  }
+  log(stages.str());
+  try {
+    SaveRig(result.rig, out_dir + "/result.yaml");
+    SaveKalibrFiles(result.rig, out_dir);
+  } catch (const std::exception& e) {
+    return cli.RunFailed(e.what());
+  }
+  log(FormatParameterTable(result.rig));
+  log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  return kExitOk;
+}
+
+}  // namespace
 
 int RunCalibrate(int argc, char** argv) {
   namespace po = boost::program_options;
@@ -80,6 +112,9 @@ int RunCalibrate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.InputError(e.what());
   }
+
+  if (rig.IsCameraOnly())
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file);
 
   SplineCalibrationResult result;
   try {

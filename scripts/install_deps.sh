@@ -14,6 +14,7 @@ PACKAGES=(
   libyaml-cpp-dev libcairo2-dev
   clang-format
   poppler-utils opencv-doc visp-images-data
+  chromium
 )
 
 missing=()

@@ -547,86 +547,107 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
 }
 
 DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
-  DetectionResult result;
+  // Kalibr's rejection rules and the sub-pixel refinement, applied to one pass's tags.
+  const auto accept = [&](const std::vector<TagDetection>& tags, const std::set<int>& bad_border) {
+    DetectionResult result;
+    result.tags_detected = static_cast<int>(tags.size());
+    for (int id : bad_border) {
+      if (std::none_of(tags.begin(), tags.end(),
+                       [id](const TagDetection& t) { return t.id == id; }))
+        result.rejected.push_back({id, RejectReason::kBadBorder});
+    }
+
+    std::map<int, int> id_count;
+    for (const TagDetection& tag : tags)
+      ++id_count[tag.id];
+    const double margin = options_.min_border_distance_px;
+    const int cells = Board::kTagDataBits + 2 * board_.config().black_tag_border;
+    for (const TagDetection& tag : tags) {
+      if (tag.id >= board_.NumTags()) {
+        result.rejected.push_back({tag.id, RejectReason::kUnknownId});
+        continue;
+      }
+      if (id_count[tag.id] > 1) {
+        result.rejected.push_back({tag.id, RejectReason::kDuplicateId});
+        continue;
+      }
+      bool near_border = false;
+      for (const Eigen::Vector2d& c : tag.corners) {
+        near_border |= c.x() < margin || c.y() < margin || c.x() > gray.cols - 1 - margin ||
+                       c.y() > gray.rows - 1 - margin;
+      }
+      if (near_border) {
+        result.rejected.push_back({tag.id, RejectReason::kNearBorder});
+        continue;
+      }
+      // The clean neighbourhood of a tag corner is the black border's width (and the corner
+      // square); the window stays inside it, and at least Kalibr's 5 x 5.
+      double edge = 0.0;
+      for (int k = 0; k < 4; ++k)
+        edge +=
+            (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
+                .norm();
+      const double bit_px = edge / 4.0 / cells;
+      const int half_window =
+          std::clamp(static_cast<int>(0.8 * board_.config().black_tag_border * bit_px), 2, 12);
+      // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
+      // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
+      // is two bits away, so a jump up to 0.4 bit still lands on the right one.
+      const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
+      const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
+      std::array<DetectedCorner, 4> refined;
+      bool ok = true;
+      for (size_t k = 0; k < 4; ++k) {
+        refined[k].id = ids[k];
+        refined[k].uv = tag.corners[k];
+        refined[k].sigma = options_.default_sigma_px;
+        if (!options_.refine)
+          continue;
+        double sigma = 0.0;
+        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma) ||
+            (refined[k].uv - tag.corners[k]).norm() > max_jump) {
+          ok = false;
+          break;
+        }
+        refined[k].sigma = std::max(options_.min_sigma_px, sigma);
+      }
+      if (!ok) {
+        result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
+        continue;
+      }
+      ++result.tags_accepted;
+      result.corners.insert(result.corners.end(), refined.begin(), refined.end());
+    }
+    if (result.tags_accepted < options_.min_tags) {
+      if (result.tags_accepted > 0)
+        result.rejected.push_back({-1, RejectReason::kTooFewTags});
+      result.corners.clear();
+    }
+    std::sort(result.corners.begin(), result.corners.end(),
+              [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
+    result.board_found = !result.corners.empty();
+    return result;
+  };
+
   std::unique_ptr<TagContext> context = AcquireTagContext();
   std::set<int> bad_border;
-  const std::vector<TagDetection> tags =
-      DetectGridTags(context->detector, gray, board_, &bad_border);
+  DetectionResult result =
+      accept(DetectGridTags(context->detector, gray, board_, &bad_border), bad_border);
+  // Decimated quad search is fastest and most robust on real photos, but can lose small or
+  // sharply printed tags, or fit their corners too coarsely for the refinement; when some of the
+  // board's tags were not accepted, one pass at full resolution gets the chance to find them, and
+  // the pass that accepted more tags is kept.
+  if (context->detector->quad_decimate > 1.0f && result.tags_accepted < board_.NumTags()) {
+    const float decimated = context->detector->quad_decimate;
+    context->detector->quad_decimate = 1.0f;
+    std::set<int> bad_border_full;
+    DetectionResult full =
+        accept(DetectGridTags(context->detector, gray, board_, &bad_border_full), bad_border_full);
+    context->detector->quad_decimate = decimated;
+    if (full.tags_accepted > result.tags_accepted)
+      result = std::move(full);
+  }
   ReleaseTagContext(std::move(context));
-  result.tags_detected = static_cast<int>(tags.size());
-  for (int id : bad_border) {
-    if (std::none_of(tags.begin(), tags.end(), [id](const TagDetection& t) { return t.id == id; }))
-      result.rejected.push_back({id, RejectReason::kBadBorder});
-  }
-
-  std::map<int, int> id_count;
-  for (const TagDetection& tag : tags)
-    ++id_count[tag.id];
-  const double margin = options_.min_border_distance_px;
-  const int cells = Board::kTagDataBits + 2 * board_.config().black_tag_border;
-  for (const TagDetection& tag : tags) {
-    if (tag.id >= board_.NumTags()) {
-      result.rejected.push_back({tag.id, RejectReason::kUnknownId});
-      continue;
-    }
-    if (id_count[tag.id] > 1) {
-      result.rejected.push_back({tag.id, RejectReason::kDuplicateId});
-      continue;
-    }
-    bool near_border = false;
-    for (const Eigen::Vector2d& c : tag.corners) {
-      near_border |= c.x() < margin || c.y() < margin || c.x() > gray.cols - 1 - margin ||
-                     c.y() > gray.rows - 1 - margin;
-    }
-    if (near_border) {
-      result.rejected.push_back({tag.id, RejectReason::kNearBorder});
-      continue;
-    }
-    // The clean neighbourhood of a tag corner is the black border's width (and the corner
-    // square); the window stays inside it, and at least Kalibr's 5 x 5.
-    double edge = 0.0;
-    for (int k = 0; k < 4; ++k)
-      edge += (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
-                  .norm();
-    const double bit_px = edge / 4.0 / cells;
-    const int half_window =
-        std::clamp(static_cast<int>(0.8 * board_.config().black_tag_border * bit_px), 2, 12);
-    // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
-    // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
-    // is two bits away, so a jump up to 0.4 bit still lands on the right one.
-    const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
-    const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
-    std::array<DetectedCorner, 4> refined;
-    bool ok = true;
-    for (size_t k = 0; k < 4; ++k) {
-      refined[k].id = ids[k];
-      refined[k].uv = tag.corners[k];
-      refined[k].sigma = options_.default_sigma_px;
-      if (!options_.refine)
-        continue;
-      double sigma = 0.0;
-      if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma) ||
-          (refined[k].uv - tag.corners[k]).norm() > max_jump) {
-        ok = false;
-        break;
-      }
-      refined[k].sigma = std::max(options_.min_sigma_px, sigma);
-    }
-    if (!ok) {
-      result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
-      continue;
-    }
-    ++result.tags_accepted;
-    result.corners.insert(result.corners.end(), refined.begin(), refined.end());
-  }
-  if (result.tags_accepted < options_.min_tags) {
-    if (result.tags_accepted > 0)
-      result.rejected.push_back({-1, RejectReason::kTooFewTags});
-    result.corners.clear();
-  }
-  std::sort(result.corners.begin(), result.corners.end(),
-            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
-  result.board_found = !result.corners.empty();
   return result;
 }
 
