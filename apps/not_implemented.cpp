@@ -26,28 +26,8 @@ int NotYet(const char* name, const char* synopsis, int argc, char** argv) {
 
 #define CTCAL_STUB __attribute__((weak))
 
-CTCAL_STUB int RunSimulate(int argc, char** argv) {
-  return NotYet("simulate", "--scenario NAME --seed N --out DATA [--duration S] [--images]", argc,
-                argv);
-}
-CTCAL_STUB int RunDetect(int argc, char** argv) {
-  return NotYet("detect", "--target TARGET.yaml --data DATA [--camera cam0]", argc, argv);
-}
-CTCAL_STUB int RunCalibrate(int argc, char** argv) {
-  return NotYet("calibrate", "--rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both]",
-                argc, argv);
-}
-CTCAL_STUB int RunCompare(int argc, char** argv) {
-  return NotYet("compare", "--truth TRUTH.yaml --result RESULT.yaml [--json OUT.json]", argc, argv);
-}
-CTCAL_STUB int RunReport(int argc, char** argv) {
-  return NotYet("report", "--out OUT", argc, argv);
-}
 CTCAL_STUB int RunMonteCarlo(int argc, char** argv) {
   return NotYet("montecarlo", "--scenario NAME --runs N --out DIR", argc, argv);
-}
-CTCAL_STUB int RunTarget(int argc, char** argv) {
-  return NotYet("target", "--target TARGET.yaml --out board.pdf", argc, argv);
 }
 
 }  // namespace ctcal::app
