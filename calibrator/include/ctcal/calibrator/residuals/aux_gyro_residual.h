@@ -172,12 +172,7 @@ class AuxGyroResidual {
   };
 
   static ceres::CostFunction* MakeAutoDiff(const Setup& setup) {
-    auto* cost =
-        new ceres::DynamicAutoDiffCostFunction<Functor, kAutoDiffStride>(new Functor{setup});
-    for (const int size : BlockSizes(setup.model))
-      cost->AddParameterBlock(size);
-    cost->SetNumResiduals(kNumResiduals);
-    return cost;
+    return MakeDynamicAutoDiff(new Functor{setup}, BlockSizes(setup.model), kNumResiduals);
   }
 };
 

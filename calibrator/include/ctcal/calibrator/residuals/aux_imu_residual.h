@@ -180,12 +180,7 @@ class AuxImuResidual {
   };
 
   static ceres::CostFunction* MakeAutoDiff(const Setup& setup) {
-    auto* cost =
-        new ceres::DynamicAutoDiffCostFunction<Functor, kAutoDiffStride>(new Functor(setup));
-    for (const int size : BlockSizes(setup.layout))
-      cost->AddParameterBlock(size);
-    cost->SetNumResiduals(kNumResiduals);
-    return cost;
+    return MakeDynamicAutoDiff(new Functor(setup), BlockSizes(setup.layout), kNumResiduals);
   }
 };
 

@@ -187,12 +187,8 @@ class CornerResidual {
   // The autodiff cost function of the functor over the same blocks.
   template <class Model>
   static ceres::CostFunction* MakeAutoDiff(const CornerMeasurement& m, const SegmentClock& clock) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<Functor<Model>, kAutoDiffStride>(
-        new Functor<Model>{m, clock});
-    for (const int size : BlockSizes(Model::kNumParams))
-      cost->AddParameterBlock(size);
-    cost->SetNumResiduals(kNumResiduals);
-    return cost;
+    return MakeDynamicAutoDiff(new Functor<Model>{m, clock}, BlockSizes(Model::kNumParams),
+                               kNumResiduals);
   }
 };
 

@@ -130,11 +130,8 @@ inline ceres::CostFunction* MakeVectorPrior(bool analytic, const Eigen::VectorXd
   const VectorPrior::Functor f{x0, residual_internal::InverseSigmas(sigma, "VectorPrior")};
   if (analytic)
     return new VectorPrior::Analytic(f);
-  auto* cost = new ceres::DynamicAutoDiffCostFunction<VectorPrior::Functor, kAutoDiffStride>(
-      new VectorPrior::Functor(f));
-  cost->AddParameterBlock(static_cast<int>(x0.size()));
-  cost->SetNumResiduals(static_cast<int>(x0.size()));
-  return cost;
+  const int size = static_cast<int>(x0.size());
+  return MakeDynamicAutoDiff(new VectorPrior::Functor(f), {size}, size);
 }
 
 }  // namespace ctcal

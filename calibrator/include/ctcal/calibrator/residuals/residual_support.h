@@ -19,12 +19,14 @@
 // the plain derivative with respect to the 3 numbers, and Ceres applies the sphere's PlusJacobian.
 #pragma once
 
+#include <ceres/dynamic_autodiff_cost_function.h>
 #include <ceres/manifold.h>
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ctcal/spline/bspline_basis.h"
 #include "ctcal/spline/se3_spline.h"
@@ -134,5 +136,17 @@ inline void CheckCount(const char* residual, const char* what, std::size_t got, 
 // The Jet stride of the autodiff path (ceres::DynamicAutoDiffCostFunction): derivatives are
 // propagated kAutoDiffStride parameters at a time.
 inline constexpr int kAutoDiffStride = 8;
+
+// The autodiff twin of an analytic residual: the same functor over the same blocks (takes
+// ownership of `functor`).
+template <typename Functor>
+ceres::CostFunction* MakeDynamicAutoDiff(Functor* functor, const std::vector<int>& block_sizes,
+                                         int num_residuals) {
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<Functor, kAutoDiffStride>(functor);
+  for (const int size : block_sizes)
+    cost->AddParameterBlock(size);
+  cost->SetNumResiduals(num_residuals);
+  return cost;
+}
 
 }  // namespace ctcal
