@@ -160,6 +160,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
       m.sigma_px = c.sigma.value_or(s.config.pixel_sigma);
       cam.corners.push_back(m);
       cam.stamps.push_back(c.t_ns);
+      cam.corner_ids.push_back(c.corner_id);
     }
     cam.removed.assign(cam.corners.size(), false);
   }
@@ -383,6 +384,9 @@ void FinishResult(
     obs.directions.push_back(dir);
   }
   result.observability = obs;
+  out->covariance = cov.covariance;
+  out->covariance_names = info.names;
+  out->covariance_undetermined = undetermined;
 
   const double inf = std::numeric_limits<double>::infinity();
   int offset = 0;

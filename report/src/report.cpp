@@ -437,26 +437,31 @@ class Builder {
       InertialFigures(&sec, s, a->second, "accel", "m/s^2", s.noise.AccelSampleSigma());
     if (b != data_.bias.end()) {
       const bool both = !b->second.gyro.empty() && !b->second.accel.empty();
-      auto f = NewFigure("fig-" + s.name + "-bias",
-                         s.name + ": bias estimates with +-3 sigma envelopes", both ? 2 : 1, 3);
+      auto f =
+          NewFigure("fig-" + s.name + "-bias",
+                    s.name + ": bias estimates with +-3 sigma random-walk envelopes from the start",
+                    both ? 2 : 1, 3);
       for (const auto* part : {&b->second.gyro, &b->second.accel}) {
         if (part->empty())
           continue;
         const bool gyro = part == &b->second.gyro;
         for (int ax = 0; ax < 3; ++ax) {
+          // The random-walk envelope opens from the bias at the track's start
+          // (report_data.h): where the stated random walk lets the true bias wander.
           std::vector<double> t, v, lo, hi;
+          const double b0 = part->front().b[ax];
           for (const auto& r : *part) {
             t.push_back(Sec(r.t_ns));
             v.push_back(r.b[ax]);
-            lo.push_back(r.b[ax] - 3 * r.sigma[ax]);
-            hi.push_back(r.b[ax] + 3 * r.sigma[ax]);
+            lo.push_back(b0 - 3 * r.sigma[ax]);
+            hi.push_back(b0 + 3 * r.sigma[ax]);
           }
           auto& p = f->Add<XYPlot>();
           p.title = std::string(gyro ? "gyro " : "accel ") + "xyz"[ax];
           p.x_label = "time [s]";
           p.y_label = gyro ? "rad/s" : "m/s^2";
           p.legend = ax == 0;
-          p.Band(t, lo, hi, "+-3 sigma", PaletteColor(gyro ? 0 : 1));
+          p.Band(t, lo, hi, "+-3 sigma random walk", PaletteColor(gyro ? 0 : 1));
           p.Line(t, v, "bias", PaletteColor(gyro ? 0 : 1), 1.5);
         }
       }

@@ -13,12 +13,14 @@
 //      residual statistics, the result rig.
 #pragma once
 
+#include <Eigen/Core>
 #include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 #include "ctcal/spline/se3_spline.h"
@@ -56,6 +58,9 @@ struct SplineCalibratorOptions {
   int min_views = 10;
   int max_rebucket_rounds = 3;
   bool compute_covariance = true;
+  // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
+  // (report_data_builder.h), in SplineCalibrationResult::report_data.
+  bool report_data = true;
 };
 
 struct CameraOutliers {
@@ -77,6 +82,12 @@ struct SplineCalibrationResult {
   double covariance_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<std::string> warnings;
+  // Marginal covariance of the estimated calibration parameters (tangent space, one name per
+  // row, marginal_covariance.h; empty without compute_covariance), undetermined rows flagged.
+  Eigen::MatrixXd covariance;
+  std::vector<std::string> covariance_names;
+  std::vector<bool> covariance_undetermined;
+  report::ReportData report_data;  // everything but run_info (the caller's)
 };
 
 // Receives every progress line (stages, iterations with their cost, warnings).

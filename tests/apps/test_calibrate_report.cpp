@@ -1,0 +1,250 @@
+// `ctcal calibrate` writes the report end to end (issue 10): on a short simulated recording it
+// leaves OUT/report_data/ and OUT/report.html / OUT/report.pdf with every section and figure of
+// the rig's sensors, no empty plot, report data that agree with result.yaml's residual
+// statistics (they are evaluated independently, from the final values), and `ctcal report`
+// re-renders the same document from the folder alone.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../report/report_test_util.h"
+#include "ctcal/report/report_data.h"
+#include "ctcal/sensors/rig_yaml.h"
+
+namespace ctcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Every `<attr>="<prefix>..."` value in the HTML, in document order.
+std::vector<std::string> Ids(const std::string& html, const std::string& prefix) {
+  std::vector<std::string> ids;
+  const std::string key = "id=\"" + prefix;
+  for (auto at = html.find(key); at != std::string::npos; at = html.find(key, at + 1)) {
+    const auto begin = at + 4;
+    ids.push_back(html.substr(begin, html.find('"', begin) - begin));
+  }
+  return ids;
+}
+
+std::string SectionOf(const std::string& html, const std::string& id) {
+  const auto at = html.find("<section id=\"" + id + "\">");
+  if (at == std::string::npos)
+    return "";
+  return html.substr(at, html.find("</section>", at) - at);
+}
+
+// One simulated recording and its calibration, shared by the tests of this file.
+class CalibrateReport : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new std::string(report::test::MakeTempDir("ctcal_calibrate_report"));
+    const std::string data = *root_ + "/data";
+    const std::string out = *root_ + "/out";
+    const std::string bin = CTCAL_BINARY;
+    sim_rc_ = std::system((bin + " simulate --scenario full --seed 5 --duration 8 --out " + data +
+                           " > " + *root_ + "/simulate.log 2>&1")
+                              .c_str());
+    if (sim_rc_ == 0)
+      calib_rc_ = std::system((bin + " calibrate --rig " + data + "/rig.yaml --data " + data +
+                               " --out " + out + " --threads 2 > " + *root_ + "/calibrate.log 2>&1")
+                                  .c_str());
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*root_);
+    delete root_;
+  }
+  void SetUp() override {
+    ASSERT_EQ(sim_rc_, 0) << "see " << *root_ << "/simulate.log";
+    ASSERT_EQ(calib_rc_, 0) << Slurp(*root_ + "/calibrate.log");
+    out_ = *root_ + "/out";
+    result_ = LoadRig(out_ + "/result.yaml");
+  }
+
+  static std::string* root_;
+  static int sim_rc_, calib_rc_;
+  std::string out_;
+  RigConfig result_;
+};
+std::string* CalibrateReport::root_ = nullptr;
+int CalibrateReport::sim_rc_ = -1;
+int CalibrateReport::calib_rc_ = -1;
+
+TEST_F(CalibrateReport, WritesEverySectionAndFigureOfTheRig) {
+  ASSERT_TRUE(fs::exists(out_ + "/report.html"));
+  ASSERT_TRUE(fs::exists(out_ + "/report.pdf"));
+  EXPECT_NE(Slurp(out_ + "/log.txt").find("report: "), std::string::npos);
+  const std::string html = Slurp(out_ + "/report.html");
+
+  std::vector<std::string> sections = {"sec-summary",       "sec-parameters", "sec-kalibr",
+                                       "sec-trajectory",    "sec-histograms", "sec-correlation",
+                                       "sec-observability", "sec-config"};
+  std::vector<std::string> figures = {"fig-summary",     "fig-parameters", "fig-kalibr-camchain",
+                                      "fig-kalibr-imu",  "fig-trajectory", "fig-histograms",
+                                      "fig-correlation", "fig-excitation", "fig-config"};
+  int cameras = 0, inertial = 0;
+  for (const SensorConfig& s : result_.sensors) {
+    if (s.IsInertial()) {
+      ++inertial;
+      sections.push_back("sec-imu-" + s.name);
+      for (const char* f : {"-intervals", "-gyro", "-gyro-error", "-bias"})
+        figures.push_back("fig-" + s.name + f);
+      if (s.type == SensorType::kImu) {
+        figures.push_back("fig-" + s.name + "-accel");
+        figures.push_back("fig-" + s.name + "-accel-error");
+      }
+    } else {
+      ++cameras;
+      sections.push_back("sec-camera-" + s.name);
+      for (const char* f : {"-residuals", "-image"})
+        figures.push_back("fig-" + s.name + f);
+      if (s.camera_model == "pinhole" && s.distortion_model != "none")
+        figures.push_back("fig-" + s.name + "-distortion");
+    }
+  }
+  ASSERT_GE(cameras, 1);
+  ASSERT_GE(inertial, 2);
+  for (const std::string& id : sections) {
+    const std::string sec = SectionOf(html, id);
+    ASSERT_FALSE(sec.empty()) << id;
+    EXPECT_EQ(sec.find("class=\"omitted\""), std::string::npos) << id << " was omitted";
+  }
+  const std::vector<std::string> drawn = Ids(html, "fig-");
+  for (const std::string& id : figures)
+    EXPECT_NE(std::find(drawn.begin(), drawn.end(), id), drawn.end()) << id;
+  // The configuration and versions of the run.
+  const std::string config = SectionOf(html, "sec-config");
+  for (const char* key :
+       {"command", "config.rig", "config.method", "version.ctcal", "version.ceres", "version.eigen",
+        "version.suitesparse", "version.opencv"})
+    EXPECT_NE(config.find(key), std::string::npos) << key;
+}
+
+TEST_F(CalibrateReport, NoPdfPageIsEmpty) {
+  const std::string prefix = *root_ + "/page";
+  const std::string cmd = "pdftoppm -r 30 -gray -png " + out_ + "/report.pdf " + prefix;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  int pages = 0;
+  for (const auto& e : fs::directory_iterator(*root_)) {
+    if (e.path().filename().string().rfind("page", 0) != 0)
+      continue;
+    ++pages;
+    const cv::Mat page = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(page.empty()) << e.path();
+    const cv::Mat body = page(cv::Rect(0, page.rows / 10, page.cols, page.rows * 8 / 10));
+    EXPECT_GT(report::test::PixelStdDev(body), 8.0) << e.path();
+  }
+  EXPECT_GE(pages, 25);
+}
+
+// The report data are the measurement models evaluated afresh at the final values; result.yaml's
+// statistics come from the solver's residual blocks. They must agree to rounding.
+TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
+  for (const SensorConfig& s : result_.sensors) {
+    const auto stats = result_.residuals.find(s.name);
+    ASSERT_NE(stats, result_.residuals.end()) << s.name;
+    if (!s.IsInertial()) {
+      const auto rows = report::ReadCornerResiduals(report::CornersPath(out_, s.name));
+      ASSERT_FALSE(rows.empty()) << s.name;
+      double sum = 0.0;
+      int n = 0, outliers = 0;
+      std::set<int> frames;
+      for (const auto& r : rows) {
+        frames.insert(r.frame);
+        if (r.outlier) {
+          ++outliers;
+          continue;
+        }
+        sum += r.whitened * r.whitened;
+        n += 2;
+      }
+      EXPECT_EQ(n, stats->second.count) << s.name;
+      EXPECT_NEAR(std::sqrt(sum / n), *stats->second.rms_whitened,
+                  1e-6 * *stats->second.rms_whitened)
+          << s.name;
+      EXPECT_GT(frames.size(), 50u) << s.name;
+      continue;
+    }
+    const auto gyro = report::ReadInertialSamples(report::GyroPath(out_, s.name));
+    ASSERT_FALSE(gyro.empty()) << s.name;
+    const double sigma_g = s.noise.GyroSampleSigma();
+    double sum = 0.0;
+    for (const auto& r : gyro)
+      sum += ((r.meas - r.pred) / sigma_g).squaredNorm();
+    ASSERT_TRUE(stats->second.rms_whitened_gyro) << s.name;
+    EXPECT_NEAR(std::sqrt(sum / (3.0 * gyro.size())), *stats->second.rms_whitened_gyro,
+                1e-6 * *stats->second.rms_whitened_gyro)
+        << s.name;
+    if (s.type == SensorType::kImu) {
+      const auto accel = report::ReadInertialSamples(report::AccelPath(out_, s.name));
+      ASSERT_EQ(accel.size(), gyro.size()) << s.name;
+      const double sigma_a = s.noise.AccelSampleSigma();
+      double sa = 0.0;
+      for (const auto& r : accel)
+        sa += ((r.meas - r.pred) / sigma_a).squaredNorm();
+      EXPECT_NEAR(std::sqrt(sa / (3.0 * accel.size())), *stats->second.rms_whitened_accel,
+                  1e-6 * *stats->second.rms_whitened_accel)
+          << s.name;
+    }
+    // The random-walk envelope: 0 at the first row, sigma_rw sqrt(t - t_first) after.
+    const report::BiasTrack bias = report::ReadBiasTrack(report::BiasPath(out_, s.name));
+    ASSERT_GE(bias.gyro.size(), 10u) << s.name;
+    EXPECT_EQ(bias.gyro.front().sigma.norm(), 0.0);
+    const auto& last = bias.gyro.back();
+    const double dt = 1e-9 * static_cast<double>(last.t_ns - bias.gyro.front().t_ns);
+    EXPECT_NEAR(last.sigma.x(), s.noise.gyroscope_random_walk * std::sqrt(dt),
+                1e-12 + 1e-9 * last.sigma.x());
+    EXPECT_EQ(bias.accel.empty(), s.type != SensorType::kImu) << s.name;
+  }
+}
+
+TEST_F(CalibrateReport, CorrelationIsAValidCorrelationMatrix) {
+  const report::Correlation c = report::ReadCorrelation(report::CorrelationPath(out_));
+  // Every estimated scalar except gravity (3 ambient components, 2 tangent directions).
+  const std::size_t estimated = ScalarParameters(result_, true).size();
+  ASSERT_EQ(c.names.size(), estimated - 1);
+  ASSERT_EQ(c.values.rows(), static_cast<Eigen::Index>(c.names.size()));
+  int strong = 0;
+  for (Eigen::Index i = 0; i < c.values.rows(); ++i) {
+    EXPECT_EQ(c.values(i, i), 1.0) << c.names[static_cast<std::size_t>(i)];
+    for (Eigen::Index j = 0; j < i; ++j) {
+      EXPECT_NEAR(c.values(i, j), c.values(j, i), 1e-12);
+      EXPECT_LE(std::abs(c.values(i, j)), 1.0 + 1e-9);
+      strong += std::abs(c.values(i, j)) > 0.5;
+    }
+  }
+  // Camera focal lengths and board distance, extrinsics and time offsets correlate: a matrix of
+  // zeros would mean the covariance was lost on the way.
+  EXPECT_GT(strong, 0);
+}
+
+TEST_F(CalibrateReport, ReportCommandReRendersTheSameDocument) {
+  const std::string before = Slurp(out_ + "/report.html");
+  fs::remove(out_ + "/report.html");
+  fs::remove(out_ + "/report.pdf");
+  const std::string cmd =
+      std::string(CTCAL_BINARY) + " report --out " + out_ + " > " + *root_ + "/report.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << Slurp(*root_ + "/report.log");
+  ASSERT_TRUE(fs::exists(out_ + "/report.pdf"));
+  const std::string after = Slurp(out_ + "/report.html");
+  EXPECT_EQ(Ids(after, "sec-"), Ids(before, "sec-"));
+  EXPECT_EQ(Ids(after, "fig-"), Ids(before, "fig-"));
+}
+
+}  // namespace
+}  // namespace ctcal
