@@ -75,8 +75,16 @@ std::vector<double> Ticks(double lo, double hi, int n) {
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
   const double f = raw / mag;
   const double step = mag * (f < 1.5 ? 1.0 : f < 3.0 ? 2.0 : f < 7.0 ? 5.0 : 10.0);
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
+  // Counted, not accumulated: a range far narrower than its magnitude (a constant sample
+  // interval with 1e-12 jitter) would make `v += step` a no-op and the loop endless.
+  const double first = std::ceil(lo / step - 1e-9);
+  const double count = std::floor(hi / step + 1e-9) - first;
+  if (!(count >= 0.0 && count <= 100.0))
+    return t;
+  for (int i = 0; i <= static_cast<int>(count); ++i) {
+    const double v = (first + i) * step;
     t.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+  }
   return t;
 }
 
@@ -91,7 +99,8 @@ void Range(const std::vector<double>& v, double* lo, double* hi) {
 
 // Pads a degenerate or tight range so that data do not sit on the frame.
 void Pad(double* lo, double* hi, double frac) {
-  if (!(*hi > *lo)) {
+  // A range below 1e-9 of its magnitude is rounding noise on one value: treat it as one value.
+  if (!(*hi - *lo > 1e-9 * std::max(std::abs(*lo), std::abs(*hi)))) {
     const double c = std::isfinite(*lo) ? *lo : 0.0;
     const double d = std::max(std::abs(c) * 0.1, 1e-9);
     *lo = c - d;
@@ -771,6 +780,13 @@ void Trajectory3D::Draw(void* cairo, const Rect& area) const {
   }
   const double extent = std::max((hi3 - lo3).maxCoeff(), 1e-3);
   const double triad = 0.08 * extent;
+  // The bounding box is drawn too: its corners stick out of the path's outline in most views.
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1) ? hi3.x() : lo3.x(), (k & 2) ? hi3.y() : lo3.y(),
+                                 (k & 4) ? hi3.z() : lo3.z());
+    lo = lo.cwiseMin(proj(corner));
+    hi = hi.cwiseMax(proj(corner));
+  }
   lo -= Eigen::Vector2d::Constant(triad * 1.5);
   hi += Eigen::Vector2d::Constant(triad * 1.5);
   const double s = std::min(p.w / (hi.x() - lo.x()), p.h / (hi.y() - lo.y()));
@@ -898,6 +914,41 @@ void MatrixPlot::Draw(void* cairo, const Rect& area) const {
       const std::string s = Fit(cr, names[i], label_w - 4);
       Text(cr, s, p.x - 3, p.y + (i + 0.5) * cell, 1.0, 0.5);
       Text(cr, s, p.x + (i + 0.5) * cell, p.y + p.h + 3, 1.0, 0.5, -M_PI / 2);
+    }
+  } else if (!names.empty()) {
+    // Too many for a label each: one per quantity (`cam0.intrinsics`, the name up to its
+    // index), with thin lines between the quantities so that blocks can be told apart.
+    std::vector<std::pair<int, int>> groups;
+    std::vector<std::string> keys;
+    for (int i = 0; i < n && i < static_cast<int>(names.size()); ++i) {
+      const std::string key = names[i].substr(0, names[i].find('['));
+      if (keys.empty() || keys.back() != key) {
+        groups.emplace_back(i, i + 1);
+        keys.push_back(key);
+      } else {
+        groups.back().second = i + 1;
+      }
+    }
+    cairo_set_source_rgba(cr, 0.2, 0.2, 0.2, 0.35);
+    cairo_set_line_width(cr, 0.4);
+    for (const auto& [begin, end] : groups) {
+      if (begin == 0)
+        continue;
+      cairo_move_to(cr, p.x + begin * cell, p.y);
+      cairo_line_to(cr, p.x + begin * cell, p.y + p.h);
+      cairo_move_to(cr, p.x, p.y + begin * cell);
+      cairo_line_to(cr, p.x + p.w, p.y + begin * cell);
+    }
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const double span = (groups[g].second - groups[g].first) * cell;
+      if (span < 5.0)
+        continue;
+      const double mid = (groups[g].first + groups[g].second) * 0.5 * cell;
+      const std::string s = Fit(cr, keys[g], label_w - 4);
+      Text(cr, s, p.x - 3, p.y + mid, 1.0, 0.5);
+      Text(cr, s, p.x + mid, p.y + p.h + 3, 1.0, 0.5, -M_PI / 2);
     }
   }
   ColorBar(cr, Rect{p.x + p.w + 10, p.y, 12, p.h}, -1.0, 1.0, "correlation",

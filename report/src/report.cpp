@@ -334,11 +334,12 @@ class Builder {
       return sec;
     }
     auto f = NewFigure("fig-trajectory", "Base IMU trajectory T_W_B", 1, 2);
-    for (const double az : {-60.0, 30.0}) {
+    for (const bool oblique : {true, false}) {
       auto& v = f->Add<Trajectory3D>();
-      v.azimuth_deg = az;
-      v.elevation_deg = az < 0 ? 25.0 : 60.0;
-      v.title = az < 0 ? "oblique view" : "top-down view";
+      // Top-down: azimuth -90 deg puts world x to the right and y up on the page.
+      v.azimuth_deg = oblique ? -60.0 : -90.0;
+      v.elevation_deg = oblique ? 25.0 : 90.0;
+      v.title = oblique ? "oblique view" : "top-down view (x right, y up)";
       for (const auto& p : data_.trajectory) {
         v.p_W.push_back(p.p_W_B);
         v.R_W.push_back(p.q_W_B.normalized().toRotationMatrix());
@@ -508,16 +509,19 @@ class Builder {
       p.equal_aspect = true;
       p.ScatterByValue(du, dv, frame, 1.6);
       auto& t = f->Add<XYPlot>();
-      t.title = "per-image RMS over time";
+      t.title = "per-image RMS over time (per coordinate)";
       t.x_label = "time [s]";
       t.y_label = "RMS [px]";
       std::vector<double> ft, fr;
       for (const auto& [k, pf] : per_frame) {
         ft.push_back(pf.first);
-        fr.push_back(std::sqrt(pf.second.first / std::max(pf.second.second, 1)));
+        fr.push_back(std::sqrt(pf.second.first / (2.0 * std::max(pf.second.second, 1))));
       }
       t.Line(ft, fr, "", PaletteColor(0), 1.0);
       t.Scatter(ft, fr, "", PaletteColor(0), 1.8);
+      // What a frame's RMS scatters about when the stated noise holds.
+      if (s.pixel_sigma > 0)
+        t.HLine(s.pixel_sigma, "pixel_sigma", PaletteColor(3));
       sec.figures.push_back(f);
     }
     {

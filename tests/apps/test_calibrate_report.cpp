@@ -17,6 +17,7 @@
 
 #include "../report/report_test_util.h"
 #include "ctcal/report/report_data.h"
+#include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
 
 namespace ctcal {
