@@ -708,7 +708,25 @@ void Table::Draw(void* cairo, const Rect& area) const {
   double total = 0;
   for (const double x : w)
     total += x;
-  const double scale = total > p.w ? p.w / total : 1.0;
+  if (total > p.w) {
+    // Too wide: cap the widest columns at one common width, so that narrow ones (status,
+    // sensor) stay whole and only long text is cut.
+    std::vector<double> sorted(w);
+    std::sort(sorted.begin(), sorted.end());
+    double below = 0.0, cap = p.w / static_cast<double>(cols);
+    for (size_t i = 0; i < sorted.size(); ++i) {
+      const double c = (p.w - below) / static_cast<double>(sorted.size() - i);
+      if (c <= sorted[i]) {
+        cap = c;
+        break;
+      }
+      below += sorted[i];
+    }
+    for (double& x : w)
+      x = std::min(x, cap);
+    total = p.w;
+  }
+  const double scale = 1.0;
   const double rh = font_size * 1.65;
   double y = p.y;
   for (size_t r = 0; r < rows.size() && y + rh <= p.y + p.h + 0.5; ++r) {

@@ -330,7 +330,9 @@ class Builder {
   Section TrajectorySection() {
     Section sec("sec-trajectory", "Estimated poses in 3-D");
     if (data_.trajectory.empty()) {
-      sec.omitted = "no trajectory (report_data/trajectory.csv absent)";
+      sec.omitted = rig_.IsCameraOnly()
+                        ? "a camera-only rig has one board pose per frame, no trajectory"
+                        : "no trajectory (report_data/trajectory.csv absent)";
       return sec;
     }
     auto f = NewFigure("fig-trajectory", "Base IMU trajectory T_W_B", 1, 2);
@@ -686,7 +688,11 @@ class Builder {
       sec.omitted = "no correlation matrix (report_data/correlation.csv absent)";
       return sec;
     }
-    auto f = NewFigure("fig-correlation", "Parameter correlation (trajectory marginalised)", 1, 1);
+    auto f = NewFigure("fig-correlation",
+                       rig_.IsCameraOnly()
+                           ? "Parameter correlation (board poses marginalised)"
+                           : "Parameter correlation (trajectory and biases marginalised)",
+                       1, 1);
     auto& m = f->Add<MatrixPlot>();
     m.values = data_.correlation.values;
     m.names = data_.correlation.names;
@@ -1013,8 +1019,15 @@ std::vector<Check> EvaluateChecks(const RigConfig& result, const ReportData& dat
     obs.value = "not analysed";
   } else {
     const auto& o = *result.observability;
-    obs.value = std::to_string(o.unobservable.size()) + " unobservable, " +
-                std::to_string(o.weak.size()) + " weak";
+    // The names themselves, so that the first page says what to fix (up to three of each).
+    const auto names = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (std::size_t i = 0; i < v.size() && i < 3; ++i)
+        s += (i ? ", " : " (") + v[i];
+      return v.empty() ? s : s + (v.size() > 3 ? ", ...)" : ")");
+    };
+    obs.value = std::to_string(o.unobservable.size()) + " unobservable" + names(o.unobservable) +
+                ", " + std::to_string(o.weak.size()) + " weak" + names(o.weak);
     obs.status = !o.unobservable.empty() ? Status::kFail
                  : !o.weak.empty()       ? Status::kWarn
                                          : Status::kPass;
