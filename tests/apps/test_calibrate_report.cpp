@@ -261,5 +261,41 @@ TEST_F(CalibrateReport, ReportCommandReRendersTheSameDocument) {
   EXPECT_EQ(Ids(after, "fig-"), Ids(before, "fig-"));
 }
 
+// A camera-only rig (SPEC section 7) gets the same report from its own model: camera sections with
+// every corner, the correlation, and no trajectory (omitted, saying why).
+TEST(CalibrateReportCameraOnly, EurocStereo) {
+  const fs::path data = fs::path(CTCAL_SHARED_DATA_DIR) / "euroc_cam_april";
+  if (!fs::exists(data / "reference.yaml"))
+    GTEST_SKIP() << "the shared EuRoC data is absent (" << data << ")";
+  const std::string root = report::test::MakeTempDir("ctcal_camonly_report");
+  const std::string out = root + "/out";
+  const std::string cmd = std::string(CTCAL_BINARY) + " calibrate --rig " +
+                          (data / "reference.yaml").string() + " --data " + data.string() +
+                          " --out " + out + " > " + root + "/log.txt 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << Slurp(root + "/log.txt");
+  const RigConfig result = LoadRig(out + "/result.yaml");
+  const std::string html = Slurp(out + "/report.html");
+  for (const std::string cam : {"cam0", "cam1"}) {
+    const std::string sec = SectionOf(html, "sec-camera-" + cam);
+    ASSERT_FALSE(sec.empty()) << cam;
+    EXPECT_EQ(sec.find("class=\"omitted\""), std::string::npos) << cam;
+    const auto rows = report::ReadCornerResiduals(report::CornersPath(out, cam));
+    double sum = 0.0;
+    int n = 0;
+    for (const auto& r : rows) {
+      if (!r.outlier) {
+        sum += r.whitened * r.whitened;
+        n += 2;
+      }
+    }
+    const SensorResiduals& stats = result.residuals.at(cam);
+    EXPECT_EQ(n, stats.count) << cam;
+    EXPECT_NEAR(std::sqrt(sum / n), *stats.rms_whitened, 1e-6 * *stats.rms_whitened) << cam;
+  }
+  EXPECT_EQ(SectionOf(html, "sec-correlation").find("class=\"omitted\""), std::string::npos);
+  EXPECT_NE(SectionOf(html, "sec-trajectory").find("camera-only"), std::string::npos);
+  fs::remove_all(root);
+}
+
 }  // namespace
 }  // namespace ctcal
