@@ -9,11 +9,14 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace ctcal::report {
 namespace {
@@ -464,23 +467,72 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
         SetColor(cr, s.color);
         cairo_set_line_width(cr, s.width);
         bool pen = false;  // NaN breaks the line
-        for (size_t i = 0; i < n; ++i) {
-          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-            pen = false;
-            continue;
-          }
+        const auto point = [&](size_t i) {
           if (pen)
             cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           else
             cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           pen = true;
+        };
+        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as each half-point
+        // column's first, lowest, highest and last point: the same picture (spikes kept) at a
+        // fraction of the path, so that the PDF stays small and fast to view.
+        const bool thin = s.kind == Series::Kind::kLine && static_cast<double>(n) > 4 * p.w;
+        size_t first = n, lo = n, hi = n, last = n;
+        double column = 0.0;
+        const auto flush = [&]() {
+          if (first == n)
+            return;
+          std::array<size_t, 4> idx{first, std::min(lo, hi), std::max(lo, hi), last};
+          for (size_t k = 0; k < idx.size(); ++k) {
+            if (k == 0 || idx[k] != idx[k - 1])
+              point(idx[k]);
+          }
+          first = n;
+        };
+        for (size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+            flush();
+            pen = false;
+            continue;
+          }
+          if (!thin) {
+            point(i);
+            continue;
+          }
+          const double c = std::floor(2.0 * ax.X(s.x[i]));
+          if (first != n && c != column)
+            flush();
+          if (first == n) {
+            first = lo = hi = last = i;
+            column = c;
+            continue;
+          }
+          last = i;
+          if (s.y[i] < s.y[lo])
+            lo = i;
+          if (s.y[i] > s.y[hi])
+            hi = i;
         }
+        flush();
         cairo_stroke(cr);
         break;
       }
       case Series::Kind::kScatter: {
+        // A dot on (nearly) the spot of an earlier dot of the same colour adds nothing to the
+        // picture but bytes: 100k+ corners of a minute's recording pile up in the centre.
+        std::unordered_set<std::uint64_t> drawn;
+        const double cell = std::max(0.25 * s.width, 0.1);
         for (size_t i = 0; i < n; ++i) {
           if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
+            continue;
+          const double u = (i < s.value.size() && vh > vl) ? (s.value[i] - vl) / (vh - vl) : 0.5;
+          const auto cx =
+              static_cast<std::uint64_t>(std::clamp(ax.X(s.x[i]) / cell + 1e5, 0.0, 2e5));
+          const auto cy =
+              static_cast<std::uint64_t>(std::clamp(ax.Y(s.y[i]) / cell + 1e5, 0.0, 2e5));
+          const auto shade = static_cast<std::uint64_t>(std::clamp(u, 0.0, 1.0) * 63.0);
+          if (!drawn.insert((cx << 32) | (cy << 8) | shade).second)
             continue;
           Color c = s.color;
           if (i < s.value.size())
