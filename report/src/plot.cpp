@@ -521,6 +521,20 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
       case Series::Kind::kScatter: {
         // A dot on (nearly) the spot of an earlier dot of the same colour adds nothing to the
         // picture but bytes: 100k+ corners of a minute's recording pile up in the centre.
+        // Beyond kRasterDots dots a vector page is still tens of MB and slow to open: the dots
+        // are drawn into an image at kRasterScale px per pt instead (same look, a fixed size).
+        constexpr size_t kRasterDots = 20000;
+        constexpr double kRasterScale = 3.0;
+        cairo_t* const page = cr;
+        cairo_surface_t* image = nullptr;
+        if (n > kRasterDots) {
+          image = cairo_image_surface_create(CAIRO_FORMAT_ARGB32,
+                                             static_cast<int>(std::ceil(p.w * kRasterScale)),
+                                             static_cast<int>(std::ceil(p.h * kRasterScale)));
+          cr = cairo_create(image);
+          cairo_scale(cr, kRasterScale, kRasterScale);
+          cairo_translate(cr, -p.x, -p.y);
+        }
         std::unordered_set<std::uint64_t> drawn;
         const double cell = std::max(0.25 * s.width, 0.1);
         for (size_t i = 0; i < n; ++i) {
@@ -541,6 +555,17 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
           SetColor(cr, c);
           cairo_arc(cr, ax.X(s.x[i]), ax.Y(s.y[i]), s.width, 0, 2 * M_PI);
           cairo_fill(cr);
+        }
+        if (image != nullptr) {
+          cairo_destroy(cr);
+          cr = page;
+          cairo_save(cr);
+          cairo_translate(cr, p.x, p.y);
+          cairo_scale(cr, 1.0 / kRasterScale, 1.0 / kRasterScale);
+          cairo_set_source_surface(cr, image, 0.0, 0.0);
+          cairo_paint(cr);
+          cairo_restore(cr);
+          cairo_surface_destroy(image);
         }
         break;
       }
