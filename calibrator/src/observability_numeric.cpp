@@ -158,17 +158,19 @@ void ReportObservability(const RigConfig& result, const Observability& observabi
   log("    predicted unobservable: " + Joined(observability.predicted_unobservable));
   log("    weak (sigma > " + std::to_string(static_cast<int>(kWeakFactor)) +
       "x the fully excited default rig): " + Joined(observability.weak));
-  std::size_t whole = 0;
+  // The motion primitives, the first kMaxMotionLines of them (result.yaml has them all).
+  constexpr std::size_t kMaxMotionLines = 30;
+  std::size_t shown = 0;
   for (const MotionPrimitive& m : observability.motion) {
     char line[200];
     std::snprintf(line, sizeof line, "    motion: %-8s %-26s axis [%+.3f %+.3f %+.3f]  %.2f-%.2f s",
                   m.sensor.c_str(), m.primitive.c_str(), m.axis.x(), m.axis.y(), m.axis.z(), m.t0,
                   m.t1);
-    if (whole++ < 30)
+    if (shown++ < kMaxMotionLines)
       log(line);
   }
-  if (whole > 30)
-    log("    motion: ... " + std::to_string(whole - 30) + " more in result.yaml");
+  if (shown > kMaxMotionLines)
+    log("    motion: ... " + std::to_string(shown - kMaxMotionLines) + " more in result.yaml");
   for (const std::string& w : ObservabilityWarnings(result, observability)) {
     log("  warning: " + w);
     if (warnings != nullptr)
