@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -127,7 +128,8 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     q += step;
     if ((q - start).norm() > h + 1.0)
       return false;
-    if (step.squaredNorm() < 1e-8) {
+    // Converged at a thousandth of a pixel: the bilinear re-sampling makes smaller steps noise.
+    if (step.squaredNorm() < 1e-6) {
       converged = true;
       break;
     }
@@ -306,6 +308,257 @@ void UndoThinning(TagDetection* tag) {
   }
 }
 
+// Tag id -> its four corners (tag order, px).
+using TagCorners = std::map<int, std::array<Eigen::Vector2d, 4>>;
+
+// Whether a tag of the board that is not in `tags` can be in the image: a homography fitted to
+// the tags found (board plane -> image) predicts where the others are. Extra passes only pay
+// when it is; a partial view whose missing tags all fall outside the frame is done.
+bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size& image_size) {
+  std::vector<cv::Point2f> board_xy, image_xy;
+  for (const auto& [id, corners] : tags) {
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    for (size_t k = 0; k < 4; ++k) {
+      const Eigen::Vector3d& p = board.Corner(ids[k]);
+      board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+      image_xy.emplace_back(static_cast<float>(corners[k].x()), static_cast<float>(corners[k].y()));
+    }
+  }
+  if (board_xy.size() < 8)
+    return true;  // too little to predict from
+  const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
+  if (H.empty())
+    return true;
+  std::vector<cv::Point2f> centres;
+  for (int id = 0; id < board.NumTags(); ++id) {
+    if (tags.count(id))
+      continue;
+    const Eigen::Vector3d c =
+        0.5 * (board.Corner(board.TagCornerIds(id)[0]) + board.Corner(board.TagCornerIds(id)[2]));
+    centres.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+  }
+  if (centres.empty())
+    return false;
+  cv::perspectiveTransform(centres, centres, H);
+  // The homography ignores lens distortion: a tenth of the image of slack at the borders.
+  const float margin = 0.1f * static_cast<float>(std::min(image_size.width, image_size.height));
+  for (const cv::Point2f& c : centres) {
+    if (c.x >= -margin && c.y >= -margin && c.x < image_size.width + margin &&
+        c.y < image_size.height + margin)
+      return true;
+  }
+  return false;
+}
+
+// Bilinear interpolation of an 8-bit image at (x, y) (pixel centres at integers); -1 outside.
+double SampleBilinear(const cv::Mat& gray, double x, double y) {
+  if (!(x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.0 && y <= gray.rows - 1.0))
+    return -1.0;
+  const int x0 = std::min(static_cast<int>(x), gray.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), gray.rows - 2);
+  const double fx = x - x0, fy = y - y0;
+  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
+  const uint8_t* r1 = gray.ptr<uint8_t>(y0 + 1) + x0;
+  return (1.0 - fy) * ((1.0 - fx) * r0[0] + fx * r0[1]) + fy * ((1.0 - fx) * r1[0] + fx * r1[1]);
+}
+
+// Reads tag `id` at the given corners (tag order) and compares it with what the board prints
+// there: the number of the 36 data bits that differ from Kalibr's code word of `id`, or -1 if
+// the view is no tag of this border width at all (no contrast, or a border ring not black).
+// Each cell is sampled at its centre through the homography of the four corners (tag cells,
+// x right and y down the printed tag -> pixels); the threshold is the midpoint between the
+// black border and the white gap outside the tag.
+int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                    const Board& board, int id) {
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const float n = static_cast<float>(cells);
+  const std::vector<cv::Point2f> tag_cells = {{0.0f, n}, {n, n}, {n, 0.0f}, {0.0f, 0.0f}};
+  std::vector<cv::Point2f> pixels;
+  for (const Eigen::Vector2d& c : corners)
+    pixels.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+  const cv::Mat H = cv::getPerspectiveTransform(tag_cells, pixels);
+  const auto sample = [&](double x, double y) {
+    const double w = H.at<double>(2, 0) * x + H.at<double>(2, 1) * y + H.at<double>(2, 2);
+    return SampleBilinear(
+        gray, (H.at<double>(0, 0) * x + H.at<double>(0, 1) * y + H.at<double>(0, 2)) / w,
+        (H.at<double>(1, 0) * x + H.at<double>(1, 1) * y + H.at<double>(1, 2)) / w);
+  };
+  std::vector<double> ring_values, white_values;
+  for (int a = 0; a < cells; ++a) {
+    for (int b = 0; b < cells; ++b) {
+      const bool in_border = a < border || b < border || a >= cells - border || b >= cells - border;
+      if (in_border)
+        ring_values.push_back(sample(a + 0.5, b + 0.5));
+    }
+  }
+  // The gap beside each edge, away from the corner squares.
+  for (int a = 2; a < cells - 2; ++a) {
+    for (const auto& [x, y] : std::vector<std::pair<double, double>>{
+             {a + 0.5, -0.5}, {a + 0.5, cells + 0.5}, {-0.5, a + 0.5}, {cells + 0.5, a + 0.5}})
+      white_values.push_back(sample(x, y));
+  }
+  if (std::count(ring_values.begin(), ring_values.end(), -1.0) > 0 ||
+      std::count(white_values.begin(), white_values.end(), -1.0) > 0)
+    return -1;  // partly outside the image
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double black = median(ring_values);
+  const double white = median(white_values);
+  // A tag reads with at least this contrast (grey levels) on any usable image.
+  if (white - black < 15.0)
+    return -1;
+  const double threshold = 0.5 * (black + white);
+  const auto dark_border = std::count_if(ring_values.begin(), ring_values.end(),
+                                         [threshold](double v) { return v < threshold; });
+  if (dark_border < static_cast<long>(0.9 * static_cast<double>(ring_values.size())))
+    return -1;
+  const uint64_t code = board.TagCode(id);
+  int distance = 0;
+  for (int row = 0; row < Board::kTagDataBits; ++row) {
+    for (int col = 0; col < Board::kTagDataBits; ++col) {
+      const bool is_white = sample(border + col + 0.5, border + row + 0.5) > threshold;
+      const int bit =
+          Board::kTagDataBits * Board::kTagDataBits - 1 - (row * Board::kTagDataBits + col);
+      distance += is_white != (((code >> bit) & 1u) != 0u) ? 1 : 0;
+    }
+  }
+  return distance;
+}
+
+// Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
+// is the black border's width (and the corner square); the window stays inside it, and is at
+// least Kalibr's 5 x 5.
+int TagCornerHalfWindow(int black_border, double bit_px) {
+  return std::clamp(static_cast<int>(0.8 * black_border * bit_px), 2, 12);
+}
+
+// The tags whose four corners are all among `corners`.
+TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& corners) {
+  std::map<int, Eigen::Vector2d> uv_of;
+  for (const DetectedCorner& c : corners)
+    uv_of[c.id] = c.uv;
+  TagCorners tags;
+  for (int id = 0; id < board.NumTags(); ++id) {
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    if (std::all_of(ids.begin(), ids.end(), [&](int k) { return uv_of.count(k) > 0; })) {
+      std::array<Eigen::Vector2d, 4> c;
+      for (size_t k = 0; k < 4; ++k)
+        c[k] = uv_of.at(ids[k]);
+      tags[id] = c;
+    }
+  }
+  return tags;
+}
+
+// Grid completion. libapriltag misses tags that a person sees at once: under fisheye distortion
+// their edges bend and its straight-edge quads fail or miss the corners by several pixels (the
+// refinement then jumps), and bridges to the corner squares hide some. The board knows where a
+// missing tag must be: each of its corners is predicted by the homography of the nearest
+// accepted neighbour tag (3 x 3 tag neighbourhood, four exact points: the more local, the less
+// lens distortion the model misses) and refined in the image (jump <= 1 bit: inside the tag the
+// next X-junction is two bits away, outside the corner square is three). The tag counts only if
+// its border is black and its 36 data bits read as the code word printed for its id within 2
+// bits (tag36h11's minimum distance is 11, so a wrong place or id does not pass). Recovered tags
+// are neighbours in the next round.
+// `excluded`: ids a rule already decided on (duplicates, near the border, another border).
+void CompleteGrid(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
+                  const std::set<int>& excluded, DetectionResult* result) {
+  TagCorners found = TagsOfCorners(board, result->corners);
+  if (found.empty())
+    return;
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const int rows = board.tag_rows(), cols = board.tag_cols();
+  const double margin = options.min_border_distance_px;
+  const auto inside = [&](const Eigen::Vector2d& uv) {
+    return uv.x() >= margin && uv.y() >= margin && uv.x() <= gray.cols - 1 - margin &&
+           uv.y() <= gray.rows - 1 - margin;
+  };
+  for (bool grown = true; grown;) {
+    grown = false;
+    for (int id = 0; id < board.NumTags(); ++id) {
+      if (found.count(id) || excluded.count(id))
+        continue;
+      // Each corner from the homography of the nearest accepted neighbour (four exact points):
+      // the more local the model, the less lens distortion it misses.
+      const std::array<int, 4> ids = board.TagCornerIds(id);
+      std::vector<cv::Point2f> predicted;
+      for (int k : ids) {
+        const Eigen::Vector2d p_W = board.Corner(k).head<2>();
+        double nearest = std::numeric_limits<double>::infinity();
+        const std::array<Eigen::Vector2d, 4>* neighbour_uv = nullptr;
+        std::array<int, 4> neighbour_ids{};
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int r = id / cols + dr, c = id % cols + dc;
+            if (r < 0 || c < 0 || r >= rows || c >= cols || !found.count(r * cols + c))
+              continue;
+            const std::array<int, 4> n_ids = board.TagCornerIds(r * cols + c);
+            const double d =
+                (0.5 * (board.Corner(n_ids[0]) + board.Corner(n_ids[2])).head<2>() - p_W).norm();
+            if (d < nearest) {
+              nearest = d;
+              neighbour_uv = &found.at(r * cols + c);
+              neighbour_ids = n_ids;
+            }
+          }
+        }
+        if (neighbour_uv == nullptr)
+          break;
+        std::vector<cv::Point2f> board_xy, image_xy;
+        for (size_t j = 0; j < 4; ++j) {
+          const Eigen::Vector3d& q = board.Corner(neighbour_ids[j]);
+          board_xy.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+          image_xy.emplace_back(static_cast<float>((*neighbour_uv)[j].x()),
+                                static_cast<float>((*neighbour_uv)[j].y()));
+        }
+        std::vector<cv::Point2f> one = {
+            cv::Point2f(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()))};
+        cv::perspectiveTransform(one, one, cv::getPerspectiveTransform(board_xy, image_xy));
+        predicted.push_back(one.front());
+      }
+      if (predicted.size() != 4)
+        continue;
+      double edge = 0.0;
+      for (size_t k = 0; k < 4; ++k)
+        edge += cv::norm(predicted[k] - predicted[(k + 1) % 4]);
+      const double bit_px = edge / 4.0 / cells;
+      if (!(bit_px >= 1.5))
+        continue;  // too small to read 36 bits
+      const int half_window = TagCornerHalfWindow(border, bit_px);
+      std::array<DetectedCorner, 4> refined;
+      std::array<Eigen::Vector2d, 4> uv;
+      bool ok = true;
+      for (size_t k = 0; k < 4 && ok; ++k) {
+        const Eigen::Vector2d start(predicted[k].x, predicted[k].y);
+        uv[k] = start;
+        double sigma = 0.0;
+        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma) &&
+             (uv[k] - start).norm() <= bit_px && inside(uv[k]);
+        refined[k].id = ids[k];
+        refined[k].uv = uv[k];
+        refined[k].sigma = std::max(options.min_sigma_px, sigma);
+      }
+      if (!ok)
+        continue;
+      const int distance = TagCodeDistance(gray, uv, board, id);
+      if (distance < 0 || distance > 2)
+        continue;
+      found[id] = uv;
+      result->corners.insert(result->corners.end(), refined.begin(), refined.end());
+      ++result->tags_accepted;
+      // Its quad was libapriltag's and too far off; the grid's prediction was not.
+      result->rejected.erase(std::remove_if(result->rejected.begin(), result->rejected.end(),
+                                            [id](const TagRejection& r) { return r.tag_id == id; }),
+                             result->rejected.end());
+      grown = true;
+    }
+  }
+}
+
 // Kalibr's black squares touch every tag at its four corners. Blurred and thresholded, the touch
 // points become black bridges: the tag's black square merges with its neighbours into one
 // component and libapriltag's quad search (black/white boundary clusters) finds no quad. Each
@@ -349,45 +602,13 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
     return n;
   };
   merge(run(gray), &confirmed);
-  // Extra passes only pay when a missing tag can be in the image: a homography fitted to the
-  // tags found (board plane -> image) predicts where the others are; a partial view whose
-  // missing tags all fall outside the frame is done after one pass.
   auto missing_tag_in_view = [&]() {
-    std::vector<cv::Point2f> board_xy, image_xy;
+    TagCorners unique;
     for (const auto& [id, list] : confirmed) {
-      if (id >= board.NumTags() || list.size() != 1)
-        continue;
-      const std::array<int, 4> ids = board.TagCornerIds(id);
-      for (size_t k = 0; k < 4; ++k) {
-        const Eigen::Vector3d& p = board.Corner(ids[k]);
-        board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
-        image_xy.emplace_back(static_cast<float>(list.front().corners[k].x()),
-                              static_cast<float>(list.front().corners[k].y()));
-      }
+      if (id < board.NumTags() && list.size() == 1)
+        unique[id] = list.front().corners;
     }
-    if (board_xy.size() < 8)
-      return true;  // too little to predict from
-    const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
-    if (H.empty())
-      return true;
-    std::vector<cv::Point2f> centres;
-    for (int id = 0; id < board.NumTags(); ++id) {
-      if (confirmed.count(id))
-        continue;
-      const Eigen::Vector3d c =
-          0.5 * (board.Corner(board.TagCornerIds(id)[0]) + board.Corner(board.TagCornerIds(id)[2]));
-      centres.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
-    }
-    if (centres.empty())
-      return false;
-    cv::perspectiveTransform(centres, centres, H);
-    // The homography ignores lens distortion: a tenth of the image of slack at the borders.
-    const float margin = 0.1f * static_cast<float>(std::min(gray.cols, gray.rows));
-    for (const cv::Point2f& c : centres) {
-      if (c.x >= -margin && c.y >= -margin && c.x < gray.cols + margin && c.y < gray.rows + margin)
-        return true;
-    }
-    return false;
+    return MissingTagInView(board, unique, gray.size());
   };
   auto add_thinned_seeds = [&] {
     // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
@@ -580,16 +801,13 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
         result.rejected.push_back({tag.id, RejectReason::kNearBorder});
         continue;
       }
-      // The clean neighbourhood of a tag corner is the black border's width (and the corner
-      // square); the window stays inside it, and at least Kalibr's 5 x 5.
       double edge = 0.0;
       for (int k = 0; k < 4; ++k)
         edge +=
             (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
                 .norm();
       const double bit_px = edge / 4.0 / cells;
-      const int half_window =
-          std::clamp(static_cast<int>(0.8 * board_.config().black_tag_border * bit_px), 2, 12);
+      const int half_window = TagCornerHalfWindow(board_.config().black_tag_border, bit_px);
       // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
       // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
       // is two bits away, so a jump up to 0.4 bit still lands on the right one.
@@ -618,14 +836,14 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
       ++result.tags_accepted;
       result.corners.insert(result.corners.end(), refined.begin(), refined.end());
     }
-    if (result.tags_accepted < options_.min_tags) {
-      if (result.tags_accepted > 0)
-        result.rejected.push_back({-1, RejectReason::kTooFewTags});
-      result.corners.clear();
+    if (options_.refine) {
+      std::set<int> decided;
+      for (const TagRejection& r : result.rejected) {
+        if (r.reason != RejectReason::kRefinementJump)
+          decided.insert(r.tag_id);
+      }
+      CompleteGrid(gray, board_, options_, decided, &result);
     }
-    std::sort(result.corners.begin(), result.corners.end(),
-              [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
-    result.board_found = !result.corners.empty();
     return result;
   };
 
@@ -637,7 +855,8 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
   // sharply printed tags, or fit their corners too coarsely for the refinement; when some of the
   // board's tags were not accepted, one pass at full resolution gets the chance to find them, and
   // the pass that accepted more tags is kept.
-  if (context->detector->quad_decimate > 1.0f && result.tags_accepted < board_.NumTags()) {
+  if (context->detector->quad_decimate > 1.0f && result.tags_accepted < board_.NumTags() &&
+      MissingTagInView(board_, TagsOfCorners(board_, result.corners), gray.size())) {
     const float decimated = context->detector->quad_decimate;
     context->detector->quad_decimate = 1.0f;
     std::set<int> bad_border_full;
@@ -648,6 +867,14 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
       result = std::move(full);
   }
   ReleaseTagContext(std::move(context));
+  if (result.tags_accepted < options_.min_tags) {
+    if (result.tags_accepted > 0)
+      result.rejected.push_back({-1, RejectReason::kTooFewTags});
+    result.corners.clear();
+  }
+  std::sort(result.corners.begin(), result.corners.end(),
+            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
+  result.board_found = !result.corners.empty();
   return result;
 }
 
