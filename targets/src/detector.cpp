@@ -68,6 +68,30 @@ cv::Mat ToGray8(const cv::Mat& image) {
   return out;
 }
 
+// Immerkaer's estimate (Fast noise variance estimation, CVIU 1996), made robust to edges by a
+// median: the mask [1 -2 1; -2 4 -2; 1 -2 1] cancels every locally linear intensity, leaving
+// noise of variance 36 sigma^2; the median of its magnitude over the image is 0.6745 * 6 sigma.
+double EstimateNoiseSigma(const cv::Mat& gray) {
+  CV_Assert(gray.type() == CV_8UC1);
+  if (gray.rows < 3 || gray.cols < 3)
+    return 0.0;
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(gray, response, CV_16S, mask);
+  std::vector<int64_t> histogram(16 * 255 + 1, 0);
+  for (int v = 1; v + 1 < response.rows; ++v) {
+    const int16_t* row = response.ptr<int16_t>(v);
+    for (int u = 1; u + 1 < response.cols; ++u)
+      ++histogram[static_cast<size_t>(std::abs(row[u]))];
+  }
+  const int64_t half = static_cast<int64_t>(response.rows - 2) * (response.cols - 2) / 2;
+  int64_t count = 0;
+  size_t median = 0;
+  while (median + 1 < histogram.size() && count + histogram[median] <= half)
+    count += histogram[median++];
+  return 1.4826 * static_cast<double>(median) / 6.0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sub-pixel refinement.
 //
@@ -76,13 +100,26 @@ cv::Mat ToGray8(const cv::Mat& image) {
 // with Gaussian weights w gives the normal equations
 //   G q = sum_i w_i g_i g_i^T p_i,   G = sum_i w_i g_i g_i^T,
 // solved repeatedly with the window re-centred on q (the gradients are re-sampled by bilinear
-// interpolation at the new sub-pixel positions). The residuals r_i = g_i^T (p_i - q) measure how
-// well the corner model fits; their sandwich estimate
-//   Cov(q) = G^-1 (sum_i w_i^2 r_i^2 g_i g_i^T) G^-1
-// is the reported uncertainty (no assumption of equal noise across the window).
-bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px) {
+// interpolation at the new sub-pixel positions).
+//
+// Uncertainty: at the solution F(q) = sum_i w_i g_i g_i^T d_i = 0 with d_i = p_i - q. Image noise
+// perturbs each gradient by dg_i; to first order dF = sum_i w_i (dg_i g_i^T d_i + g_i dg_i^T d_i),
+// whose first term vanishes with the model residual g_i^T d_i = 0, and dF/dq = -G, so
+//   dq = G^-1 sum_i w_i g_i d_i^T dg_i.
+// Central differences of white noise of sigma_n grey levels have Cov(dg_i) = sigma_n^2 / 2 I
+// (neighbouring gradients' correlation neglected), hence
+//   Cov(q) = sigma_n^2 / 2 G^-1 (sum_i w_i^2 |d_i|^2 g_i g_i^T) G^-1.
+// (The sandwich of the model residuals r_i = g_i^T d_i instead measured how far a blurred
+// X-junction is from the ideal one, symmetric misfit that does not move q: 7x the scatter.)
+bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
+                  double noise_sigma) {
   CV_Assert(gray.type() == CV_8UC1);
-  const int h = std::max(1, half_window);
+  // Near the image border the window shrinks to fit rather than give up on the corner.
+  const double room = std::min(std::min(uv->x(), uv->y()),
+                               std::min(gray.cols - 1.0 - uv->x(), gray.rows - 1.0 - uv->y()));
+  if (!(room >= 4.0))
+    return false;
+  const int h = std::max(1, std::min(half_window, static_cast<int>(room) - 3));
   const int n = 2 * h + 3;  // patch with a one-pixel rim for central differences
   const double weight_sigma = 0.5 * (h + 1);
   std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
@@ -149,11 +186,10 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
         const int c = dx + h + 1;
         const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
         const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
-        const double r = g.dot(Eigen::Vector2d(dx, dy));
-        meat += (w * w * r * r) * g * g.transpose();
+        meat += (w * w * (dx * dx + dy * dy)) * g * g.transpose();
       }
     }
-    const Eigen::Matrix2d cov = G_inv * meat * G_inv;
+    const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
     *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
   }
   *uv = q;
@@ -464,8 +500,9 @@ TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& 
 // bits (tag36h11's minimum distance is 11, so a wrong place or id does not pass). Recovered tags
 // are neighbours in the next round.
 // `excluded`: ids a rule already decided on (duplicates, near the border, another border).
-void CompleteGrid(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
-                  const std::set<int>& excluded, DetectionResult* result) {
+void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
+                  const DetectorOptions& options, const std::set<int>& excluded,
+                  DetectionResult* result) {
   TagCorners found = TagsOfCorners(board, result->corners);
   if (found.empty())
     return;
@@ -536,7 +573,7 @@ void CompleteGrid(const cv::Mat& gray, const Board& board, const DetectorOptions
         const Eigen::Vector2d start(predicted[k].x, predicted[k].y);
         uv[k] = start;
         double sigma = 0.0;
-        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma) &&
+        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
              (uv[k] - start).norm() <= bit_px && inside(uv[k]);
         refined[k].id = ids[k];
         refined[k].uv = uv[k];
@@ -764,10 +801,14 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   // No board fits in fewer pixels (and libapriltag's decimation needs a few to work on).
   if (gray.cols < kMinImageSide || gray.rows < kMinImageSide)
     return result;
-  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray) : DetectCheckerboard(gray);
+  // The 8-bit quantisation alone is uniform noise of 1/sqrt(12) grey levels.
+  const double noise_sigma =
+      options_.refine ? std::max(EstimateNoiseSigma(gray), 1.0 / std::sqrt(12.0)) : 0.0;
+  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray, noise_sigma)
+                                                 : DetectCheckerboard(gray, noise_sigma);
 }
 
-DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
+DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {
   // Kalibr's rejection rules and the sub-pixel refinement, applied to one pass's tags.
   const auto accept = [&](const std::vector<TagDetection>& tags, const std::set<int>& bad_border) {
     DetectionResult result;
@@ -822,7 +863,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
         if (!options_.refine)
           continue;
         double sigma = 0.0;
-        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma) ||
+        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma, noise_sigma) ||
             (refined[k].uv - tag.corners[k]).norm() > max_jump) {
           ok = false;
           break;
@@ -842,7 +883,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
         if (r.reason != RejectReason::kRefinementJump)
           decided.insert(r.tag_id);
       }
-      CompleteGrid(gray, board_, options_, decided, &result);
+      CompleteGrid(gray, noise_sigma, board_, options_, decided, &result);
     }
     return result;
   };
@@ -878,7 +919,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
   return result;
 }
 
-DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
+DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const {
   DetectionResult result;
   const int rows = board_.rows();
   const int cols = board_.cols();
@@ -937,7 +978,8 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
     if (options_.refine) {
       Eigen::Vector2d uv = corner.uv;
       double sigma = 0.0;
-      if (RefineCorner(gray, half_window, &uv, &sigma) && (uv - corner.uv).norm() <= max_jump) {
+      if (RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) &&
+          (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
         corner.sigma = std::max(options_.min_sigma_px, sigma);
       } else {

@@ -96,8 +96,9 @@ class Detector {
   struct TagContext;
   std::unique_ptr<TagContext> AcquireTagContext() const;
   void ReleaseTagContext(std::unique_ptr<TagContext> context) const;
-  DetectionResult DetectAprilGrid(const cv::Mat& gray) const;
-  DetectionResult DetectCheckerboard(const cv::Mat& gray) const;
+  // noise_sigma: the image's noise (grey levels), for the corners' sigma.
+  DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
+  DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
 
   Board board_;
   DetectorOptions options_;
@@ -125,9 +126,14 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 
 // Refines an X-junction or a corner near `uv` by the gradient-orthogonality condition (every
 // image gradient in a window is orthogonal to the vector from the corner to its pixel), weighted
-// by a Gaussian. Returns false if it does not converge. `sigma_px` (optional) is the estimate's
-// standard deviation from the fit's residuals: s^2 * (sum g g^T)^-1, s^2 the residual variance.
+// by a Gaussian; the window shrinks near the image border. Returns false if it does not converge.
+// `sigma_px` (optional): the estimate's standard deviation per coordinate caused by white image
+// noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv,
-                  double* sigma_px = nullptr);
+                  double* sigma_px = nullptr, double noise_sigma = 1.0);
+
+// The standard deviation of an 8-bit image's white noise (grey levels), robust to edges
+// (Immerkaer's mask with a median).
+double EstimateNoiseSigma(const cv::Mat& gray);
 
 }  // namespace ctcal
