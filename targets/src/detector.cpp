@@ -348,9 +348,12 @@ void UndoThinning(TagDetection* tag) {
 using TagCorners = std::map<int, std::array<Eigen::Vector2d, 4>>;
 
 // Whether a tag of the board that is not in `tags` can be in the image: a homography fitted to
-// the tags found (board plane -> image) predicts where the others are. Extra passes only pay
-// when it is; a partial view whose missing tags all fall outside the frame is done.
-bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size& image_size) {
+// the tags found (board plane -> image) predicts where the others are, and a tag counts when its
+// four corners fall inside the image grown by `margin_px` (negative: shrunk). The homography
+// ignores lens distortion, which the caller's margin allows for. Extra passes only pay when a
+// tag is missing; a partial view whose missing tags all fall outside the frame is done.
+bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size& image_size,
+                      double margin_px) {
   std::vector<cv::Point2f> board_xy, image_xy;
   for (const auto& [id, corners] : tags) {
     const std::array<int, 4> ids = board.TagCornerIds(id);
@@ -365,22 +368,19 @@ bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size
   const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
   if (H.empty())
     return true;
-  std::vector<cv::Point2f> centres;
   for (int id = 0; id < board.NumTags(); ++id) {
     if (tags.count(id))
       continue;
-    const Eigen::Vector3d c =
-        0.5 * (board.Corner(board.TagCornerIds(id)[0]) + board.Corner(board.TagCornerIds(id)[2]));
-    centres.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
-  }
-  if (centres.empty())
-    return false;
-  cv::perspectiveTransform(centres, centres, H);
-  // The homography ignores lens distortion: a tenth of the image of slack at the borders.
-  const float margin = 0.1f * static_cast<float>(std::min(image_size.width, image_size.height));
-  for (const cv::Point2f& c : centres) {
-    if (c.x >= -margin && c.y >= -margin && c.x < image_size.width + margin &&
-        c.y < image_size.height + margin)
+    std::vector<cv::Point2f> corners;
+    for (int k : board.TagCornerIds(id))
+      corners.emplace_back(static_cast<float>(board.Corner(k).x()),
+                           static_cast<float>(board.Corner(k).y()));
+    cv::perspectiveTransform(corners, corners, H);
+    if (std::all_of(corners.begin(), corners.end(), [&](const cv::Point2f& c) {
+          return c.x >= -margin_px && c.y >= -margin_px &&
+                 c.x <= image_size.width - 1 + margin_px &&
+                 c.y <= image_size.height - 1 + margin_px;
+        }))
       return true;
   }
   return false;
@@ -596,6 +596,21 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
   }
 }
 
+// One libapriltag pass over `image` (the original or a modified copy of `gray`); tags whose
+// second border ring is not black in `gray` go to `bad_border` instead.
+std::vector<TagDetection> RunCheckingBorder(apriltag_detector_t* detector, const cv::Mat& image,
+                                            const cv::Mat& gray, const Board& board,
+                                            std::set<int>* bad_border) {
+  std::vector<TagDetection> kept;
+  for (const TagDetection& tag : RunApriltag(detector, image)) {
+    if (InnerBorderIsBlack(gray, tag, board.config().black_tag_border))
+      kept.push_back(tag);
+    else
+      bad_border->insert(tag.id);
+  }
+  return kept;
+}
+
 // Kalibr's black squares touch every tag at its four corners. Blurred and thresholded, the touch
 // points become black bridges: the tag's black square merges with its neighbours into one
 // component and libapriltag's quad search (black/white boundary clusters) finds no quad. Each
@@ -603,18 +618,12 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
 // painting them white frees the neighbours, which the next pass finds, and so on. libapriltag
 // fits its corners to whole edges, so the small bite this takes out of a tag's corner does not
 // move them; the sub-pixel refinement runs on the untouched image anyway.
+// `first_pass`: the tags of one RunCheckingBorder on `gray` already made (nullptr: run it).
 std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv::Mat& gray,
-                                         const Board& board, std::set<int>* bad_border) {
+                                         const Board& board, std::set<int>* bad_border,
+                                         const std::vector<TagDetection>* first_pass) {
   auto run = [&](const cv::Mat& image) {
-    std::vector<TagDetection> tags = RunApriltag(detector, image);
-    std::vector<TagDetection> kept;
-    for (const TagDetection& tag : tags) {
-      if (InnerBorderIsBlack(gray, tag, board.config().black_tag_border))
-        kept.push_back(tag);
-      else
-        bad_border->insert(tag.id);
-    }
-    return kept;
+    return RunCheckingBorder(detector, image, gray, board, bad_border);
   };
   // Tags by id; a run that decodes an id twice keeps both (the duplicate rule needs them).
   // `confirmed` come from the image itself or its painted copy, `seeds` from the thinned copy.
@@ -638,14 +647,15 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
       n += entry.first < board.NumTags() ? 1 : 0;
     return n;
   };
-  merge(run(gray), &confirmed);
+  merge(first_pass != nullptr ? *first_pass : run(gray), &confirmed);
   auto missing_tag_in_view = [&]() {
     TagCorners unique;
     for (const auto& [id, list] : confirmed) {
       if (id < board.NumTags() && list.size() == 1)
         unique[id] = list.front().corners;
     }
-    return MissingTagInView(board, unique, gray.size());
+    // A tenth of the image of slack for lens distortion: a painting pass is cheap.
+    return MissingTagInView(board, unique, gray.size(), 0.1 * std::min(gray.cols, gray.rows));
   };
   auto add_thinned_seeds = [&] {
     // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
@@ -888,24 +898,55 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
     return result;
   };
 
+  // Cheapest first, each further step only while a tag of the board whose corners are predicted
+  // inside the image is still missing: one decimated libapriltag pass and grid completion (all
+  // that a clear view needs); then the painted and thinned passes (docs/targets.md); then the
+  // same at full resolution, which finds small or sharply printed tags that decimation loses.
+  const auto tag_missing = [&](const DetectionResult& r) {
+    return r.tags_accepted < board_.NumTags() &&
+           MissingTagInView(board_, TagsOfCorners(board_, r.corners), gray.size(),
+                            -options_.min_border_distance_px);
+  };
   std::unique_ptr<TagContext> context = AcquireTagContext();
   std::set<int> bad_border;
-  DetectionResult result =
-      accept(DetectGridTags(context->detector, gray, board_, &bad_border), bad_border);
-  // Decimated quad search is fastest and most robust on real photos, but can lose small or
-  // sharply printed tags, or fit their corners too coarsely for the refinement; when some of the
-  // board's tags were not accepted, one pass at full resolution gets the chance to find them, and
-  // the pass that accepted more tags is kept.
-  if (context->detector->quad_decimate > 1.0f && result.tags_accepted < board_.NumTags() &&
-      MissingTagInView(board_, TagsOfCorners(board_, result.corners), gray.size())) {
+  const std::vector<TagDetection> first =
+      RunCheckingBorder(context->detector, gray, gray, board_, &bad_border);
+  DetectionResult result = accept(first, bad_border);
+  // The pass that accepted more tags is kept; an id that any pass decoded twice is dropped (which
+  // copy is the board's is unknown, also when one pass saw only one of them).
+  const auto keep_better = [&](DetectionResult other) {
+    std::set<int> duplicates;
+    for (const TagRejection& r : other.rejected) {
+      if (r.reason == RejectReason::kDuplicateId)
+        duplicates.insert(r.tag_id);
+    }
+    if (other.tags_accepted > result.tags_accepted)
+      result = std::move(other);
+    for (int id : duplicates) {
+      const std::array<int, 4> ids = board_.TagCornerIds(id);
+      const auto end = std::remove_if(result.corners.begin(), result.corners.end(),
+                                      [&ids](const DetectedCorner& c) {
+                                        return std::find(ids.begin(), ids.end(), c.id) != ids.end();
+                                      });
+      if (end == result.corners.end())
+        continue;
+      result.corners.erase(end, result.corners.end());
+      --result.tags_accepted;
+      result.rejected.push_back({id, RejectReason::kDuplicateId});
+    }
+  };
+  if (tag_missing(result))
+    keep_better(
+        accept(DetectGridTags(context->detector, gray, board_, &bad_border, &first), bad_border));
+  if (context->detector->quad_decimate > 1.0f && tag_missing(result)) {
     const float decimated = context->detector->quad_decimate;
     context->detector->quad_decimate = 1.0f;
     std::set<int> bad_border_full;
     DetectionResult full =
-        accept(DetectGridTags(context->detector, gray, board_, &bad_border_full), bad_border_full);
+        accept(DetectGridTags(context->detector, gray, board_, &bad_border_full, nullptr),
+               bad_border_full);
     context->detector->quad_decimate = decimated;
-    if (full.tags_accepted > result.tags_accepted)
-      result = std::move(full);
+    keep_better(std::move(full));
   }
   ReleaseTagContext(std::move(context));
   if (result.tags_accepted < options_.min_tags) {
