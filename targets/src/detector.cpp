@@ -32,6 +32,8 @@ const char* ToString(RejectReason reason) {
       return "sub-pixel refinement jumped";
     case RejectReason::kBadBorder:
       return "black border not as printed (wrong blackTagBorder?)";
+    case RejectReason::kTooSmall:
+      return "too small to refine";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -559,12 +561,13 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
       }
       if (predicted.size() != 4)
         continue;
-      double edge = 0.0;
+      // The shortest edge sets the scale: a foreshortened tag's bits are narrow across it.
+      double edge = std::numeric_limits<double>::infinity();
       for (size_t k = 0; k < 4; ++k)
-        edge += cv::norm(predicted[k] - predicted[(k + 1) % 4]);
-      const double bit_px = edge / 4.0 / cells;
-      if (!(bit_px >= 1.5))
-        continue;  // too small to read 36 bits
+        edge = std::min(edge, static_cast<double>(cv::norm(predicted[k] - predicted[(k + 1) % 4])));
+      const double bit_px = edge / cells;
+      if (!(bit_px >= options.min_bit_px))
+        continue;
       const int half_window = TagCornerHalfWindow(border, bit_px);
       std::array<DetectedCorner, 4> refined;
       std::array<Eigen::Vector2d, 4> uv;
@@ -852,17 +855,21 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         result.rejected.push_back({tag.id, RejectReason::kNearBorder});
         continue;
       }
-      double edge = 0.0;
-      for (int k = 0; k < 4; ++k)
-        edge +=
-            (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
-                .norm();
-      const double bit_px = edge / 4.0 / cells;
+      // The shortest edge sets the scale of the window and of the jump bound: a foreshortened
+      // tag's bits are narrow across it, and the next X-junction is that much closer.
+      double edge = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < 4; ++k)
+        edge = std::min(edge, (tag.corners[k] - tag.corners[(k + 1) % 4]).norm());
+      const double bit_px = edge / cells;
+      if (bit_px < options_.min_bit_px) {
+        result.rejected.push_back({tag.id, RejectReason::kTooSmall});
+        continue;
+      }
       const int half_window = TagCornerHalfWindow(board_.config().black_tag_border, bit_px);
       // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
       // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
-      // is two bits away, so a jump up to 0.4 bit still lands on the right one.
-      const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
+      // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
+      const double max_jump = std::max(options_.max_refinement_jump_px, 0.8 * bit_px);
       const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
       std::array<DetectedCorner, 4> refined;
       bool ok = true;
@@ -880,6 +887,15 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         }
         refined[k].sigma = std::max(options_.min_sigma_px, sigma);
       }
+      // A refined corner that landed on another junction shifts the bit grid near it: the tag
+      // must still read as its code word at the refined corners.
+      if (ok && options_.refine) {
+        std::array<Eigen::Vector2d, 4> uv;
+        for (size_t k = 0; k < 4; ++k)
+          uv[k] = refined[k].uv;
+        const int distance = TagCodeDistance(gray, uv, board_, tag.id);
+        ok = distance >= 0 && distance <= 2;
+      }
       if (!ok) {
         result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
         continue;
@@ -890,7 +906,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
     if (options_.refine) {
       std::set<int> decided;
       for (const TagRejection& r : result.rejected) {
-        if (r.reason != RejectReason::kRefinementJump)
+        if (r.reason != RejectReason::kRefinementJump && r.reason != RejectReason::kTooSmall)
           decided.insert(r.tag_id);
       }
       CompleteGrid(gray, noise_sigma, board_, options_, decided, &result);

@@ -33,6 +33,10 @@ struct DetectorOptions {
   // A corner the sub-pixel refinement moves farther than this is dropped with its whole tag
   // (Kalibr: maxSubpixDisplacement2 = 1.5 px^2, i.e. 1.22 px).
   double max_refinement_jump_px = 1.22;
+  // A tag narrower than this per bit along its shortest edge is dropped: the refinement window
+  // then reaches the next X-junction (rendered double-sphere views: corners of tags at 1.2-1.5
+  // px per bit were off by ~1 px, at 2 px per bit and more below 0.35 px).
+  double min_bit_px = 2.0;
   // Sub-pixel refinement on/off, and the floor of the reported sigma (px): a noise-free image
   // gives a near-zero residual, which would claim more than the model of the corner can deliver.
   bool refine = true;
@@ -54,6 +58,7 @@ enum class RejectReason {
   kUnknownId,       // a tag id the board does not have (another board in view, wrong file?)
   kRefinementJump,  // sub-pixel refinement moved a corner too far / did not converge
   kBadBorder,       // decoded, but its black border is not blackTagBorder bits wide
+  kTooSmall,        // fewer than min_bit_px pixels per bit: too small to refine its corners
   kTooFewTags,      // the whole view: fewer than min_tags tags left
 };
 const char* ToString(RejectReason reason);
