@@ -485,6 +485,23 @@ TEST(RenderDetect, RefinementJumpsAreRejected) {
   EXPECT_EQ(result.tags_accepted, 35);
 }
 
+// Immerkaer's robust noise estimate on rendered views (edges everywhere) with known noise.
+TEST(RenderDetect, NoiseEstimateRecoversTheRenderedNoise) {
+  const RadtanCamera camera;
+  const Board board(Grid6x6());
+  for (const double noise : {1.5, 3.0, 6.0}) {
+    RenderOptions options;
+    options.noise_sigma = noise;
+    const cv::Mat image = BoardRenderer(board, 752, 480, Unprojection(camera), options)
+                              .Render(LookAt({0.35, 0.30, 0.85}, {0.33, 0.33, 0.0}, 0.1), 12);
+    const double estimate = EstimateNoiseSigma(image);
+    std::printf("rendered noise %.1f grey levels: estimate %.2f\n", noise, estimate);
+    // 8-bit rounding adds 1/sqrt(12) in quadrature; the median's quantisation a little more.
+    const double expected = std::sqrt(noise * noise + 1.0 / 12.0);
+    EXPECT_NEAR(estimate, expected, 0.15 * expected) << noise;
+  }
+}
+
 // The reported sigma against the scatter of the same corner over independent noise: the
 // sandwich estimate must neither claim much more nor much less than the noise delivers.
 TEST(RenderDetect, SigmaMatchesTheScatterOverNoise) {
