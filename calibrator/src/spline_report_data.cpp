@@ -31,9 +31,14 @@ report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvalua
       in.gyro[s.state->name()] = s.gyro;
   }
   report::ReportData data = BuildReportData(*prep.state, in, trajectory);
-  if (result.covariance.size() > 0)
-    data.correlation = CorrelationFromCovariance(result.covariance, result.covariance_names,
-                                                 result.covariance_undetermined);
+  if (result.covariance.size() > 0) {
+    // Undetermined by the data (sigma .inf): no correlation to show, whatever a prior did.
+    std::vector<bool> undetermined(result.covariance_names.size(), false);
+    for (Eigen::Index i = 0; i < result.data_sigma.size(); ++i)
+      undetermined[static_cast<std::size_t>(i)] = !std::isfinite(result.data_sigma(i));
+    data.correlation =
+        CorrelationFromCovariance(result.covariance, result.covariance_names, undetermined);
+  }
   return data;
 }
 

@@ -82,12 +82,13 @@ struct SplineCalibrationResult {
   double covariance_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<std::string> warnings;
-  // Marginal covariance of the estimated calibration parameters (tangent space, one name per
-  // row, marginal_covariance.h; empty without compute_covariance), undetermined rows flagged.
-  Eigen::MatrixXd covariance;
+  // Tangent-space covariance of the estimated quantities, priors included (the left perturbation
+  // for rotations, gravity as its 2-dof sphere tangent gravity_W.direction[i]), and the sigma of
+  // the data alone (.inf where undetermined), per `covariance_names`; empty without covariance.
   std::vector<std::string> covariance_names;
-  std::vector<bool> covariance_undetermined;
-  report::ReportData report_data;  // everything but run_info (the caller's)
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd data_sigma;
+  report::ReportData report_data;  // everything but run_info (the caller's; report_data_builder.h)
 };
 
 // Receives every progress line (stages, iterations with their cost, warnings).
