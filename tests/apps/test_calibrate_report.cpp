@@ -50,47 +50,18 @@ std::string SectionOf(const std::string& html, const std::string& id) {
   return html.substr(at, html.find("</section>", at) - at);
 }
 
-// One simulated recording and its calibration, shared by the tests of this file.
-class CalibrateReport : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    root_ = new std::string(report::test::MakeTempDir("ctcal_calibrate_report"));
-    const std::string data = *root_ + "/data";
-    const std::string out = *root_ + "/out";
-    const std::string bin = CTCAL_BINARY;
-    sim_rc_ = std::system((bin + " simulate --scenario full --seed 5 --duration 8 --out " + data +
-                           " > " + *root_ + "/simulate.log 2>&1")
-                              .c_str());
-    if (sim_rc_ == 0)
-      calib_rc_ = std::system((bin + " calibrate --rig " + data + "/rig.yaml --data " + data +
-                               " --out " + out + " --threads 2 > " + *root_ + "/calibrate.log 2>&1")
-                                  .c_str());
-  }
-  static void TearDownTestSuite() {
-    fs::remove_all(*root_);
-    delete root_;
-  }
-  void SetUp() override {
-    ASSERT_EQ(sim_rc_, 0) << "see " << *root_ << "/simulate.log";
-    ASSERT_EQ(calib_rc_, 0) << Slurp(*root_ + "/calibrate.log");
-    out_ = *root_ + "/out";
-    result_ = LoadRig(out_ + "/result.yaml");
-  }
-
-  static std::string* root_;
-  static int sim_rc_, calib_rc_;
-  std::string out_;
-  RigConfig result_;
+// The checks below share one simulated recording and its calibration. They run from a single
+// test: ctest starts every test case as its own process, which would redo the calibration per case.
+struct Calibrated {
+  std::string root, out;
+  RigConfig result;
 };
-std::string* CalibrateReport::root_ = nullptr;
-int CalibrateReport::sim_rc_ = -1;
-int CalibrateReport::calib_rc_ = -1;
 
-TEST_F(CalibrateReport, WritesEverySectionAndFigureOfTheRig) {
-  ASSERT_TRUE(fs::exists(out_ + "/report.html"));
-  ASSERT_TRUE(fs::exists(out_ + "/report.pdf"));
-  EXPECT_NE(Slurp(out_ + "/log.txt").find("report: "), std::string::npos);
-  const std::string html = Slurp(out_ + "/report.html");
+void WritesEverySectionAndFigureOfTheRig(const Calibrated& run) {
+  ASSERT_TRUE(fs::exists(run.out + "/report.html"));
+  ASSERT_TRUE(fs::exists(run.out + "/report.pdf"));
+  EXPECT_NE(Slurp(run.out + "/log.txt").find("report: "), std::string::npos);
+  const std::string html = Slurp(run.out + "/report.html");
 
   std::vector<std::string> sections = {"sec-summary",       "sec-parameters", "sec-kalibr",
                                        "sec-trajectory",    "sec-histograms", "sec-correlation",
@@ -99,7 +70,7 @@ TEST_F(CalibrateReport, WritesEverySectionAndFigureOfTheRig) {
                                       "fig-kalibr-imu",  "fig-trajectory", "fig-histograms",
                                       "fig-correlation", "fig-excitation", "fig-config"};
   int cameras = 0, inertial = 0;
-  for (const SensorConfig& s : result_.sensors) {
+  for (const SensorConfig& s : run.result.sensors) {
     if (s.IsInertial()) {
       ++inertial;
       sections.push_back("sec-imu-" + s.name);
@@ -136,12 +107,12 @@ TEST_F(CalibrateReport, WritesEverySectionAndFigureOfTheRig) {
     EXPECT_NE(config.find(key), std::string::npos) << key;
 }
 
-TEST_F(CalibrateReport, NoPdfPageIsEmpty) {
-  const std::string prefix = *root_ + "/page";
-  const std::string cmd = "pdftoppm -r 30 -gray -png " + out_ + "/report.pdf " + prefix;
+void NoPdfPageIsEmpty(const Calibrated& run) {
+  const std::string prefix = run.root + "/page";
+  const std::string cmd = "pdftoppm -r 30 -gray -png " + run.out + "/report.pdf " + prefix;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   int pages = 0;
-  for (const auto& e : fs::directory_iterator(*root_)) {
+  for (const auto& e : fs::directory_iterator(run.root)) {
     if (e.path().filename().string().rfind("page", 0) != 0)
       continue;
     ++pages;
@@ -155,12 +126,12 @@ TEST_F(CalibrateReport, NoPdfPageIsEmpty) {
 
 // The report data are the measurement models evaluated afresh at the final values; result.yaml's
 // statistics come from the solver's residual blocks. They must agree to rounding.
-TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
-  for (const SensorConfig& s : result_.sensors) {
-    const auto stats = result_.residuals.find(s.name);
-    ASSERT_NE(stats, result_.residuals.end()) << s.name;
+void ReportDataAgreeWithTheResidualStatistics(const Calibrated& run) {
+  for (const SensorConfig& s : run.result.sensors) {
+    const auto stats = run.result.residuals.find(s.name);
+    ASSERT_NE(stats, run.result.residuals.end()) << s.name;
     if (!s.IsInertial()) {
-      const auto rows = report::ReadCornerResiduals(report::CornersPath(out_, s.name));
+      const auto rows = report::ReadCornerResiduals(report::CornersPath(run.out, s.name));
       ASSERT_FALSE(rows.empty()) << s.name;
       double sum = 0.0;
       int n = 0, outliers = 0;
@@ -181,7 +152,7 @@ TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
       EXPECT_GT(frames.size(), 50u) << s.name;
       continue;
     }
-    const auto gyro = report::ReadInertialSamples(report::GyroPath(out_, s.name));
+    const auto gyro = report::ReadInertialSamples(report::GyroPath(run.out, s.name));
     ASSERT_FALSE(gyro.empty()) << s.name;
     const double sigma_g = s.noise.GyroSampleSigma();
     double sum = 0.0;
@@ -192,7 +163,7 @@ TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
                 1e-6 * *stats->second.rms_whitened_gyro)
         << s.name;
     if (s.type == SensorType::kImu) {
-      const auto accel = report::ReadInertialSamples(report::AccelPath(out_, s.name));
+      const auto accel = report::ReadInertialSamples(report::AccelPath(run.out, s.name));
       ASSERT_EQ(accel.size(), gyro.size()) << s.name;
       const double sigma_a = s.noise.AccelSampleSigma();
       double sa = 0.0;
@@ -203,7 +174,7 @@ TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
           << s.name;
     }
     // The random-walk envelope: 0 at the first row, sigma_rw sqrt(t - t_first) after.
-    const report::BiasTrack bias = report::ReadBiasTrack(report::BiasPath(out_, s.name));
+    const report::BiasTrack bias = report::ReadBiasTrack(report::BiasPath(run.out, s.name));
     ASSERT_GE(bias.gyro.size(), 10u) << s.name;
     EXPECT_EQ(bias.gyro.front().sigma.norm(), 0.0);
     const auto& last = bias.gyro.back();
@@ -214,16 +185,16 @@ TEST_F(CalibrateReport, ReportDataAgreeWithTheResidualStatistics) {
   }
 }
 
-TEST_F(CalibrateReport, CorrelationIsAValidCorrelationMatrix) {
-  const report::Correlation c = report::ReadCorrelation(report::CorrelationPath(out_));
+void CorrelationIsAValidCorrelationMatrix(const Calibrated& run) {
+  const report::Correlation c = report::ReadCorrelation(report::CorrelationPath(run.out));
   // Every estimated scalar except gravity (3 ambient components, 2 tangent directions).
-  const std::size_t estimated = ScalarParameters(result_, true).size();
+  const std::size_t estimated = ScalarParameters(run.result, true).size();
   ASSERT_EQ(c.names.size(), estimated - 1);
   ASSERT_EQ(c.values.rows(), static_cast<Eigen::Index>(c.names.size()));
   // An undetermined parameter (result.yaml's observability.unobservable) has no correlation: a NaN
   // row and column; every other entry is a correlation.
-  ASSERT_TRUE(result_.observability.has_value());
-  const auto& unobservable = result_.observability->unobservable;
+  ASSERT_TRUE(run.result.observability.has_value());
+  const auto& unobservable = run.result.observability->unobservable;
   std::vector<bool> nan(c.names.size());
   for (std::size_t i = 0; i < c.names.size(); ++i)
     nan[i] = std::find(unobservable.begin(), unobservable.end(), c.names[i]) != unobservable.end();
@@ -248,17 +219,57 @@ TEST_F(CalibrateReport, CorrelationIsAValidCorrelationMatrix) {
   EXPECT_GT(strong, 0);
 }
 
-TEST_F(CalibrateReport, ReportCommandReRendersTheSameDocument) {
-  const std::string before = Slurp(out_ + "/report.html");
-  fs::remove(out_ + "/report.html");
-  fs::remove(out_ + "/report.pdf");
-  const std::string cmd =
-      std::string(CTCAL_BINARY) + " report --out " + out_ + " > " + *root_ + "/report.log 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << Slurp(*root_ + "/report.log");
-  ASSERT_TRUE(fs::exists(out_ + "/report.pdf"));
-  const std::string after = Slurp(out_ + "/report.html");
+void ReportCommandReRendersTheSameDocument(const Calibrated& run) {
+  const std::string before = Slurp(run.out + "/report.html");
+  fs::remove(run.out + "/report.html");
+  fs::remove(run.out + "/report.pdf");
+  const std::string cmd = std::string(CTCAL_BINARY) + " report --out " + run.out + " > " +
+                          run.root + "/report.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << Slurp(run.root + "/report.log");
+  ASSERT_TRUE(fs::exists(run.out + "/report.pdf"));
+  const std::string after = Slurp(run.out + "/report.html");
   EXPECT_EQ(Ids(after, "sec-"), Ids(before, "sec-"));
   EXPECT_EQ(Ids(after, "fig-"), Ids(before, "fig-"));
+}
+
+TEST(CalibrateReport, SimulateCalibrateReport) {
+  Calibrated run;
+  run.root = report::test::MakeTempDir("ctcal_calibrate_report");
+  run.out = run.root + "/out";
+  const std::string data = run.root + "/data";
+  const std::string bin = CTCAL_BINARY;
+  ASSERT_EQ(std::system((bin + " simulate --scenario full --seed 5 --duration 8 --out " + data +
+                         " > " + run.root + "/simulate.log 2>&1")
+                            .c_str()),
+            0)
+      << Slurp(run.root + "/simulate.log");
+  ASSERT_EQ(std::system((bin + " calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +
+                         run.out + " --threads 2 > " + run.root + "/calibrate.log 2>&1")
+                            .c_str()),
+            0)
+      << Slurp(run.root + "/calibrate.log");
+  run.result = LoadRig(run.out + "/result.yaml");
+  {
+    SCOPED_TRACE("sections and figures");
+    WritesEverySectionAndFigureOfTheRig(run);
+  }
+  {
+    SCOPED_TRACE("pdf pages");
+    NoPdfPageIsEmpty(run);
+  }
+  {
+    SCOPED_TRACE("report data vs residual statistics");
+    ReportDataAgreeWithTheResidualStatistics(run);
+  }
+  {
+    SCOPED_TRACE("correlation");
+    CorrelationIsAValidCorrelationMatrix(run);
+  }
+  {
+    SCOPED_TRACE("ctcal report");
+    ReportCommandReRendersTheSameDocument(run);
+  }
+  fs::remove_all(run.root);
 }
 
 // A camera-only rig (SPEC section 7) gets the same report from its own model: camera sections with
