@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 #include "ctcal/spline/se3_spline.h"
@@ -56,6 +57,8 @@ struct SplineCalibratorOptions {
   int min_views = 10;
   int max_rebucket_rounds = 3;
   bool compute_covariance = true;
+  // The coarse-guess initialisation before the trajectory is built (init/coarse_init.h).
+  CoarseInitOptions coarse_init;
 };
 
 struct CameraOutliers {
