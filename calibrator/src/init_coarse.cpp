@@ -209,13 +209,26 @@ class CoarseInit {
           throw;
         Warn(std::string(e.what()) + "; the prior'd guess is kept");
       }
-      if (r) {
-        const Eigen::VectorXd delta = r->camera.params() - s.camera->params();
-        const std::vector<double> sigma =
-            PriorSigmas(s, {{"intrinsics", s.camera->NumIntrinsics()},
-                            {"distortion_coeffs", s.camera->NumDistortionCoeffs()}});
-        if (Replace(s, "intrinsics", delta, sigma))
+      // Distortion terms the views hardly determine (a wide lens' outer field) can differ from a
+      // good guess by many prior sigmas without the guess being wrong, so a prior'd guess is
+      // judged in the image: kept while it reprojects (with its own PnP poses) nearly as well as
+      // the refined model.
+      if (r && options_.policy == GuessPolicy::kBeyondPrior &&
+          (HasPrior(s, "intrinsics") || HasPrior(s, "distortion_coeffs"))) {
+        if (r->rms_px_guess <= options_.guess_rms_ratio * r->rms_px) {
+          Log(Format("    %s.intrinsics: guess kept (RMS %.3f px, the data's model %.3f px)",
+                     s.name().c_str(), r->rms_px_guess, r->rms_px));
+        } else {
+          Warn(
+              Format("%s.intrinsics: the guess reprojects at %.3f px RMS, the data's model at "
+                     "%.3f px: started from the data's model, the prior stays on the guess",
+                     s.name().c_str(), r->rms_px_guess, r->rms_px));
+          Replaced(s, "intrinsics");
           s.camera->SetParams(r->camera.params());
+        }
+      } else if (r) {
+        Replaced(s, "intrinsics");
+        s.camera->SetParams(r->camera.params());
       }
     }
     CameraViews cam;
@@ -276,6 +289,8 @@ class CoarseInit {
       return;
     }
     const double found = guess + r.time_offset;
+    Log(Format("    %s: time offset %+.3f ms on the base clock (guess %+.3f ms)", s.name().c_str(),
+               found * 1e3, guess * 1e3));
     Eigen::VectorXd delta(1);
     delta[0] = r.time_offset;
     if (Replace(s, "time_offset", delta, PriorSigmas(s, {{"time_offset", 1}})))

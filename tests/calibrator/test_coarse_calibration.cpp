@@ -190,16 +190,33 @@ TEST(CoarseCalibration, CameraWithoutViewsNamesStageAndSensor) {
                                ::testing::HasSubstr("never sees the board")));
 }
 
-// Rotation about one axis only (the yaw scenario): the auxiliary IMU's rotation about that axis is
-// free, and the hand-eye stage says so for it. The cameras' extrinsics are given (not estimated),
-// so the first sensor whose rotation is needed is imu1.
+// Rotation about one axis only (the yaw scenario: the cameras look down on the board and turn
+// about their optical axes), 5 s.
+std::string YawData() {
+  return Simulate("yaw", "--scenario yaw --seed 24 --duration 5");
+}
+
+// Every view is nearly fronto-parallel, so focal length and board depth trade freely: the
+// intrinsics stage names itself and the camera instead of handing on a degenerate model.
+TEST(CoarseCalibration, FrontoParallelViewsFailIntrinsics) {
+  const Loaded l = Load(YawData());
+  EXPECT_THAT(InputErrorOf(l.rig, l.data),
+              ::testing::AllOf(::testing::HasSubstr("stage 'camera intrinsics'"),
+                               ::testing::HasSubstr("sensor 'cam0'"),
+                               ::testing::HasSubstr("do not determine the focal length")));
+}
+
+// With the cameras given (intrinsics and extrinsics not estimated), the first rotation the
+// initialisation needs is the auxiliary IMU's, and its rotation about the only excited axis is
+// free: the hand-eye stage says so for imu1.
 TEST(CoarseCalibration, YawOnlyMotionFailsHandEyeForTheImu) {
-  Loaded l = Load(Simulate("yaw", "--scenario yaw --seed 24 --duration 5"));
+  Loaded l = Load(YawData());
   for (SensorConfig& s : l.rig.sensors) {
     if (s.type != SensorType::kCamera)
       continue;
-    s.T_B_S = l.truth.Find(s.name)->T_B_S;
-    s.estimate.erase(EstimateItem::kExtrinsics);
+    s = *l.truth.Find(s.name);
+    s.estimate = {EstimateItem::kTimeOffset};
+    s.time_offset = 0.0;
   }
   EXPECT_THAT(InputErrorOf(l.rig, l.data),
               ::testing::AllOf(::testing::HasSubstr("stage 'hand-eye rotation'"),

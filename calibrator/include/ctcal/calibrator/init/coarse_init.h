@@ -28,7 +28,9 @@ enum class GuessPolicy {
   kAlways,
   // A guess without a prior_sigma is a drawing and is replaced. A guess with one states its own
   // accuracy: it is replaced only when the data disagree with it beyond `prior_gate` of its prior
-  // sigmas in some component (logged as a warning: the prior is wrong). A stage that cannot
+  // sigmas in some component (camera intrinsics: beyond `guess_rms_ratio` in reprojection RMS),
+  // logged as a warning: the prior is wrong. The prior stays centred on the guess. A stage that
+  // cannot
   // determine a prior'd quantity (e.g. a motion about one axis only) keeps its guess with a
   // warning instead of failing, which is what SPEC's priors are for.
   kBeyondPrior,
@@ -37,6 +39,10 @@ enum class GuessPolicy {
 struct CoarseInitOptions {
   GuessPolicy policy = GuessPolicy::kBeyondPrior;
   double prior_gate = 5.0;  // prior sigmas, see kBeyondPrior
+  // Camera intrinsics with a prior are judged in the image instead (weakly determined distortion
+  // terms differ from a good guess by many prior sigmas): kept while the guess's reprojection RMS
+  // is within this factor of the refined model's.
+  double guess_rms_ratio = 1.25;
   // Half-width of the time-offset search around each sensor's guess, s. Issue 7 asks for offsets
   // up to +-100 ms from a zero guess; a peak must lie strictly inside the window.
   double max_offset_s = 0.15;
