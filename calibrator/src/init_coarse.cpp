@@ -199,6 +199,21 @@ class CoarseInit {
       throw InitError(
           "board poses", s.name(),
           "the camera never sees the board (sensors." + s.name() + ": corners.csv has no corners)");
+    // Count the usable frames first: the stages below need min_views of them.
+    std::map<std::int64_t, int> per_frame;
+    for (const CornerObservation& c : d.corners)
+      ++per_frame[c.t_ns];
+    int frames = 0;
+    for (const auto& [stamp, n] : per_frame)
+      frames += n >= options_.min_corners ? 1 : 0;
+    const auto too_few = [&](int views) {
+      return InitError("board poses", s.name(),
+                       Format("too few views of the board: sensors.%s has %d frames with a board "
+                              "pose from >= %d corners, need %d",
+                              s.name().c_str(), views, options_.min_corners, options_.min_views));
+    };
+    if (frames < options_.min_views)
+      throw too_few(frames);
     if (s.config.Estimates(EstimateItem::kIntrinsics)) {
       std::optional<IntrinsicsInitResult> r;
       try {
@@ -233,9 +248,11 @@ class CoarseInit {
     }
     CameraViews cam;
     cam.state = &s;
-    cam.views = InitBoardPoses(s.name(), *s.camera, board_, d.corners, options_.min_corners,
-                               options_.min_views, stage_log_)
-                    .views;
+    cam.views =
+        InitBoardPoses(s.name(), *s.camera, board_, d.corners, options_.min_corners, 0, stage_log_)
+            .views;
+    if (static_cast<int>(cam.views.size()) < options_.min_views)
+      throw too_few(static_cast<int>(cam.views.size()));
     cam.rates = RatesFromBoardViews(cam.views);
     cameras_.push_back(std::move(cam));
   }

@@ -50,7 +50,7 @@ struct CoarseInitOptions {
   // the calibrator sizes the margin of samples it keeps away from the trajectory's ends.
   double offset_accuracy_s = 2e-3;
   int min_corners = 12;  // corners a frame needs for a board pose in the stages
-  int min_views = 3;
+  int min_views = 10;    // board views a camera needs (as SplineCalibratorOptions::min_views)
   IntrinsicsInitOptions intrinsics;
   HandEyeOptions hand_eye;
   LeverArmOptions lever_arm;
