@@ -59,7 +59,7 @@ int RunCalibrate(int argc, char** argv) {
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma.");
-  std::string rig_path, data_dir, out_dir, method, representation;
+  std::string rig_path, data_dir, out_dir, method, representation, init_policy;
   SplineCalibratorOptions options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
                               "rig file with initial guesses (SPEC section 7)")(
@@ -74,9 +74,12 @@ int RunCalibrate(int argc, char** argv) {
       "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
       "trajectory knot spacing in s (0: from the motion's bandwidth)")(
       "bias-knot-spacing", po::value(&options.bias_knot_spacing_s)->default_value(1.0),
-      "bias spline knot spacing in s")("max-iterations",
-                                       po::value(&options.max_iterations)->default_value(50),
-                                       "Levenberg-Marquardt iterations per solve");
+      "bias spline knot spacing in s")(
+      "init", po::value(&init_policy)->default_value("beyond-prior"),
+      "coarse-guess initialisation (docs/initialisation.md): beyond-prior (replace guesses "
+      "without prior_sigma, and those the data contradict), always, off")(
+      "max-iterations", po::value(&options.max_iterations)->default_value(50),
+      "Levenberg-Marquardt iterations per solve");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
@@ -91,6 +94,14 @@ int RunCalibrate(int argc, char** argv) {
     return cli.UsageError("--representation must be split or joint, got " + representation);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  if (init_policy == "beyond-prior")
+    options.coarse_init.policy = GuessPolicy::kBeyondPrior;
+  else if (init_policy == "always")
+    options.coarse_init.policy = GuessPolicy::kAlways;
+  else if (init_policy == "off")
+    options.coarse_init.policy = GuessPolicy::kOff;
+  else
+    return cli.UsageError("--init must be beyond-prior, always or off, got " + init_policy);
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);

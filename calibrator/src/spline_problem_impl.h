@@ -460,7 +460,9 @@ class SplineProblem {
   // Priors of `prior_sigma` on the estimated blocks, centred on the input's guesses.
   void AddPriors() {
     if (prior_center_.empty()) {
-      for (const ParameterBlockInfo& b : blocks_)
+      // On the rig file's values, not on the initialisation's (coarse_init.h): same block order.
+      CalibrationState guess(state_.rig());
+      for (const ParameterBlockInfo& b : guess.Blocks())
         prior_center_.emplace_back(b.values, b.values + b.ambient_size);
     }
     for (std::size_t i = 0; i < blocks_.size(); ++i) {

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
@@ -61,6 +62,8 @@ struct SplineCalibratorOptions {
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.
   bool report_data = true;
+  // The coarse-guess initialisation before the trajectory is built (init/coarse_init.h).
+  CoarseInitOptions coarse_init;
 };
 
 struct CameraOutliers {
