@@ -112,6 +112,39 @@ MarginalInformation ComputeMarginalInformation(
   return out;
 }
 
+void AddCalibrationInformation(ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
+                               const std::vector<ceres::ResidualBlockId>& residual_blocks,
+                               MarginalInformation* info) {
+  if (residual_blocks.empty())
+    return;
+  ceres::Problem::EvaluateOptions eval;
+  std::unordered_set<const double*> calib_set;
+  for (const CalibrationBlock& b : calib) {
+    if (problem.HasParameterBlock(b.values) && !problem.IsParameterBlockConstant(b.values)) {
+      eval.parameter_blocks.push_back(b.values);
+      calib_set.insert(b.values);
+    }
+  }
+  for (const ceres::ResidualBlockId id : residual_blocks) {
+    std::vector<double*> blocks;
+    problem.GetParameterBlocksForResidualBlock(id, &blocks);
+    for (double* b : blocks) {
+      if (!calib_set.count(b) && !problem.IsParameterBlockConstant(b))
+        throw std::logic_error("covariance: a prior touches a nuisance block");
+    }
+  }
+  eval.residual_blocks = residual_blocks;
+  double cost = 0.0;
+  ceres::CRSMatrix crs;
+  if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost))
+    throw std::runtime_error("covariance: the priors cannot be evaluated at the solution");
+  const int c = static_cast<int>(info->information.rows());
+  if (crs.num_cols != c)
+    throw std::logic_error("covariance: prior Jacobian width differs from the information");
+  const SparseRowMajor J = ToEigen(crs);
+  info->information += Eigen::MatrixXd(SparseColMajor(J.transpose()) * J);
+}
+
 CalibrationCovariance InvertInformation(const MarginalInformation& info,
                                         const CovarianceOptions& options) {
   const int c = static_cast<int>(info.information.rows());
