@@ -269,8 +269,8 @@ TYPED_TEST(FrameCornersTest, OneSolverStepEqualsPerCorner) {
       EXPECT_TRUE(summary.iterations.back().step_is_successful);
       result[compressed].resize(params.size() + num_knot_values);
       result[compressed] << params, Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
-      // The step moved the intrinsics towards the truth.
-      EXPECT_LT((params - truth).head<4>().norm(), 0.5 * 4.3);
+      // A real step: the cost fell by far more than the agreement tolerance.
+      EXPECT_LT(summary.final_cost, 0.9 * summary.initial_cost);
     }
     // Both moved (the intrinsics by ~px) and agree to 1e-9 of the largest value (the focal).
     EXPECT_LT((result[1] - result[0]).cwiseAbs().maxCoeff(), 1e-9 * truth.cwiseAbs().maxCoeff())
