@@ -1,6 +1,7 @@
 // `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline] [--threads N]` (SPEC
 // section 8): loads the rig and the dataset, runs the continuous-time calibrator
-// (calibrator/spline_calibrator.h) and writes OUT/result.yaml, the Kalibr files and OUT/log.txt.
+// (calibrator/spline_calibrator.h) and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and
+// the report (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h).
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -8,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "calibrate_report.h"
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
@@ -24,7 +26,8 @@ namespace {
 // trajectory spline, and Kalibr's camchain.yaml beside the result.
 int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
                   const std::map<std::string, SensorData>& data, const std::string& out_dir,
-                  const CalibrationLog& log, std::ofstream& log_file) {
+                  const CalibrationLog& log, std::ofstream& log_file,
+                  const report::RunInfo& run_info) {
   CameraOnlyResult result;
   std::ostringstream stages;
   try {
@@ -43,6 +46,7 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   }
   log(FormatParameterTable(result.rig));
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
   return kExitOk;
 }
 
@@ -117,8 +121,22 @@ int RunCalibrate(int argc, char** argv) {
     return cli.InputError(e.what());
   }
 
+  // The configuration of the run, for the report.
+  report::RunInfo run_info = CalibrateRunInfo(argc, argv);
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"config.rig", rig_path},
+           {"config.data", data_dir},
+           {"config.out", out_dir},
+           {"config.method", method},
+           {"config.order", std::to_string(options.order)},
+           {"config.representation", representation},
+           {"config.jacobians", options.analytic ? "analytic" : "autodiff"},
+           {"config.bias_knot_spacing_s", std::to_string(options.bias_knot_spacing_s)},
+           {"config.max_iterations", std::to_string(options.max_iterations)}})
+    run_info.emplace_back(key, value);
+
   if (rig.IsCameraOnly())
-    return RunCameraOnly(cli, rig, data, out_dir, log, log_file);
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info);
 
   SplineCalibrationResult result;
   try {
@@ -147,6 +165,9 @@ int RunCalibrate(int argc, char** argv) {
                 result.covariance_seconds, result.total_seconds);
   log(line);
   log("wrote " + out_dir + "/result.yaml, camchain-imucam.yaml, imu.yaml, log.txt");
+  run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
+  run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
   return kExitOk;
 }
 

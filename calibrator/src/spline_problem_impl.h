@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 
 // TODO(residuals): bias_random_walk_residual.h uses Jacobian<> unqualified; this using makes it
@@ -49,6 +50,7 @@ struct PreparedCamera {
   SensorState* state = nullptr;
   std::vector<CornerMeasurement> corners;  // corners of frames with a board view
   std::vector<std::int64_t> stamps;        // image stamp of each corner (camera clock)
+  std::vector<int> corner_ids;             // board corner id of each corner (the report)
   std::vector<bool> removed;               // outliers
   std::vector<BoardView> views;
   int invalid = 0;
@@ -90,6 +92,11 @@ void FinishResult(
 
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback);
+
+// The report data of the final values (report_data_builder.h), from the prepared data
+// (spline_report_data.cpp).
+report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvaluator& trajectory,
+                                    const SplineCalibrationResult& result);
 
 // Prints each iteration's cost and time.
 class IterationLogger : public ceres::IterationCallback {
@@ -321,6 +328,16 @@ class SplineProblem {
   }
 
   ceres::Problem& problem() { return *problem_; }
+
+  // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
+  Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
+    const int seg = SegmentOf(t_ns, 0.0);
+    const SegmentClock clock = SegmentClock::At(t_ns, spline_.timing(), seg);
+    Se3Kinematics<double> kin;
+    Spline::template EvaluateSegment<double>(spline_.SegmentBlocks(seg).data(), clock.U(),
+                                             clock.inv_dt, derivatives, nullptr, &kin);
+    return kin;
+  }
 
  private:
   std::int64_t Clamp(std::int64_t t_ns) const {
@@ -812,11 +829,22 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   const std::clock_t cpu_cov = std::clock();
   sp.Finish(out);
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
-  char line[160];
-  std::snprintf(line, sizeof line, "  covariance and residual statistics: %.2f s (CPU %.2f s)",
-                out->covariance_seconds,
-                static_cast<double>(std::clock() - cpu_cov) / CLOCKS_PER_SEC);
-  log(line);
+  {
+    char line[160];
+    std::snprintf(line, sizeof line, "  covariance and residual statistics: %.2f s (CPU %.2f s)",
+                  out->covariance_seconds,
+                  static_cast<double>(std::clock() - cpu_cov) / CLOCKS_PER_SEC);
+    log(line);
+  }
+  if (options.report_data) {
+    const auto t_report = Clock::now();
+    out->report_data = SplineReportData(
+        *prep, [&sp](std::int64_t t_ns, int d) { return sp.EvaluateClamped(t_ns, d); }, *out);
+    char line[120];
+    std::snprintf(line, sizeof line, "  report data: every measurement at the final values, %.2f s",
+                  std::chrono::duration<double>(Clock::now() - t_report).count());
+    log(line);
+  }
 }
 
 }  // namespace spline_internal

@@ -13,12 +13,14 @@
 //      residual statistics, the result rig.
 #pragma once
 
+#include <Eigen/Core>
 #include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 #include "ctcal/spline/se3_spline.h"
@@ -59,6 +61,9 @@ struct SplineCalibratorOptions {
   int min_views = 10;
   int max_rebucket_rounds = 3;
   bool compute_covariance = true;
+  // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
+  // (report_data_builder.h), in SplineCalibrationResult::report_data.
+  bool report_data = true;
 };
 
 struct CameraOutliers {
@@ -80,6 +85,13 @@ struct SplineCalibrationResult {
   double covariance_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<std::string> warnings;
+  // Tangent-space covariance of the estimated quantities, priors included (the left perturbation
+  // for rotations, gravity as its 2-dof sphere tangent gravity_W.direction[i]), and the sigma of
+  // the data alone (.inf where undetermined), per `covariance_names`; empty without covariance.
+  std::vector<std::string> covariance_names;
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd data_sigma;
+  report::ReportData report_data;  // everything but run_info (the caller's; report_data_builder.h)
 };
 
 // Receives every progress line (stages, iterations with their cost, warnings).
