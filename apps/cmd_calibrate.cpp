@@ -68,7 +68,10 @@ int RunCalibrate(int argc, char** argv) {
       "method", po::value(&method)->default_value("spline"), "spline (discrete, both: later)")(
       "threads", po::value(&options.threads)->default_value(0), "solver threads (0: all cores)")(
       "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
-      "order", po::value(&options.order)->default_value(4), "trajectory spline order: 4, 5, 6")(
+      "per-corner-blocks", po::bool_switch(),
+      "one residual block per corner instead of one compressed block per global-shutter frame "
+      "(slower; for benchmarks)")("order", po::value(&options.order)->default_value(4),
+                                  "trajectory spline order: 4, 5, 6")(
       "representation", po::value(&representation)->default_value("split"),
       "trajectory spline: split (SO3 x R3) or joint (SE3)")(
       "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
@@ -83,6 +86,7 @@ int RunCalibrate(int argc, char** argv) {
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
+  options.compress_frames = !cli.vm()["per-corner-blocks"].as<bool>();
   if (method != "spline")
     return cli.UsageError("--method " + method +
                           ": only 'spline' is implemented (discrete and both come later)");

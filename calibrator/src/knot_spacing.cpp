@@ -8,11 +8,31 @@
 
 namespace ctcal {
 
+namespace {
+
+// The longest length <= n with no prime factor above 5. Eigen's FFT (kissfft) costs O(n p) for a
+// prime factor p of n: 10 min at 1 kHz (600001 = 19 * 23 * 1373 samples) took minutes, the
+// 5-smooth prefix (at most a fraction of a percent shorter) takes milliseconds.
+int SmoothLength(int n) {
+  for (int m = n; m > 1; --m) {
+    int k = m;
+    for (const int p : {2, 3, 5}) {
+      while (k % p == 0)
+        k /= p;
+    }
+    if (k == 1)
+      return m;
+  }
+  return n;
+}
+
+}  // namespace
+
 double SignalBandwidthHz(const std::vector<Eigen::Vector3d>& signal, double rate_hz,
                          double noise_sigma, double energy_fraction) {
-  const int n = static_cast<int>(signal.size());
-  if (n < 16)
+  if (signal.size() < 16)
     throw std::invalid_argument("bandwidth: need at least 16 samples");
+  const int n = SmoothLength(static_cast<int>(signal.size()));
   // Half-spectrum bins k = 0 .. n/2 at k * rate / n. White noise of variance s^2 puts an
   // expected |X_k|^2 of n s^2 into every bin (unnormalised DFT), exponentially distributed. Merely
   // subtracting that mean would leave ~1/e of it per bin, which over thousands of bins swamps the

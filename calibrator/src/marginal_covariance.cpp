@@ -5,6 +5,7 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -59,22 +60,32 @@ MarginalInformation ComputeMarginalInformation(
   }
   eval.parameter_blocks.insert(eval.parameter_blocks.end(), calib_blocks.begin(),
                                calib_blocks.end());
-  eval.residual_blocks = residual_blocks;
+  std::vector<ceres::ResidualBlockId> all_residuals = residual_blocks;
+  if (all_residuals.empty())
+    problem.GetResidualBlocks(&all_residuals);
 
-  double cost = 0.0;
-  ceres::CRSMatrix crs;
-  if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost)) {
-    throw std::runtime_error(
-        "covariance: the problem cannot be evaluated at the solution "
-        "(non-finite residuals or Jacobians)");
-  }
+  // H = J^T J accumulated over chunks of residual blocks: the whole Jacobian (and its transpose)
+  // of a long recording would hold hundreds of MB at once (docs/performance.md, memory).
   const int n = out.nuisance_dimension;
   const int c = static_cast<int>(units.size());
-  if (crs.num_cols != n + c)
-    throw std::logic_error("covariance: unexpected Jacobian width");
-
-  const SparseRowMajor J = ToEigen(crs);
-  const SparseColMajor H = SparseColMajor(J.transpose()) * J;
+  constexpr std::size_t kChunk = 4096;
+  SparseColMajor H(n + c, n + c);
+  for (std::size_t first = 0; first < all_residuals.size(); first += kChunk) {
+    const std::size_t last = std::min(all_residuals.size(), first + kChunk);
+    eval.residual_blocks.assign(all_residuals.begin() + static_cast<std::ptrdiff_t>(first),
+                                all_residuals.begin() + static_cast<std::ptrdiff_t>(last));
+    double cost = 0.0;
+    ceres::CRSMatrix crs;
+    if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost)) {
+      throw std::runtime_error(
+          "covariance: the problem cannot be evaluated at the solution "
+          "(non-finite residuals or Jacobians)");
+    }
+    if (crs.num_cols != n + c)
+      throw std::logic_error("covariance: unexpected Jacobian width");
+    const SparseRowMajor J = ToEigen(crs);
+    H += SparseColMajor(SparseColMajor(J.transpose()) * J);
+  }
   const Eigen::MatrixXd H_cc = Eigen::MatrixXd(H.bottomRightCorner(c, c));
   if (n == 0) {
     out.information = H_cc;
@@ -110,6 +121,39 @@ MarginalInformation ComputeMarginalInformation(
   out.information = H_cc - H_nc.transpose() * X;
   out.information = 0.5 * (out.information + out.information.transpose()).eval();
   return out;
+}
+
+void AddCalibrationInformation(ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
+                               const std::vector<ceres::ResidualBlockId>& residual_blocks,
+                               MarginalInformation* info) {
+  if (residual_blocks.empty())
+    return;
+  ceres::Problem::EvaluateOptions eval;
+  std::unordered_set<const double*> calib_set;
+  for (const CalibrationBlock& b : calib) {
+    if (problem.HasParameterBlock(b.values) && !problem.IsParameterBlockConstant(b.values)) {
+      eval.parameter_blocks.push_back(b.values);
+      calib_set.insert(b.values);
+    }
+  }
+  for (const ceres::ResidualBlockId id : residual_blocks) {
+    std::vector<double*> blocks;
+    problem.GetParameterBlocksForResidualBlock(id, &blocks);
+    for (double* b : blocks) {
+      if (!calib_set.count(b) && !problem.IsParameterBlockConstant(b))
+        throw std::logic_error("covariance: a prior touches a nuisance block");
+    }
+  }
+  eval.residual_blocks = residual_blocks;
+  double cost = 0.0;
+  ceres::CRSMatrix crs;
+  if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost))
+    throw std::runtime_error("covariance: the priors cannot be evaluated at the solution");
+  const int c = static_cast<int>(info->information.rows());
+  if (crs.num_cols != c)
+    throw std::logic_error("covariance: prior Jacobian width differs from the information");
+  const SparseRowMajor J = ToEigen(crs);
+  info->information += Eigen::MatrixXd(SparseColMajor(J.transpose()) * J);
 }
 
 CalibrationCovariance InvertInformation(const MarginalInformation& info,

@@ -283,7 +283,7 @@ ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
 void FinishResult(
     ceres::Problem& problem, CalibrationState& state,
     const std::vector<ceres::ResidualBlockId>& prior_ids,
-    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& corner_ids,
+    const std::vector<CornerResiduals>& corners,
     const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
     const SplineCalibratorOptions& options, const CalibrationLog& log,
     SplineCalibrationResult* out) {
@@ -293,23 +293,20 @@ void FinishResult(
   result.solver = solver;
 
   // --- residual statistics ---
-  for (const auto& [name, ids] : corner_ids) {
+  // Corners one by one (the problem may hold them compressed per frame).
+  for (const CornerResiduals& c : corners) {
     SensorResiduals r;
-    const SensorState* s = state.Find(name);
     double raw = 0.0, white = 0.0;
-    for (const ceres::ResidualBlockId id : ids) {
-      double e[2];
-      problem.EvaluateResidualBlock(id, false, nullptr, e, nullptr);
-      const double sq = e[0] * e[0] + e[1] * e[1];
+    for (std::size_t i = 0; i < c.whitened.size(); ++i) {
+      const double sq = c.whitened[i].squaredNorm();
       white += sq;
-      (void)s;
-      raw += sq;  // scaled below by the corner's sigma when uniform
+      raw += sq * c.sigma_px[i] * c.sigma_px[i];
     }
-    r.count = static_cast<std::int64_t>(2 * ids.size());
+    r.count = static_cast<std::int64_t>(2 * c.whitened.size());
     const double n = std::max<double>(1.0, static_cast<double>(r.count));
     r.rms_whitened = std::sqrt(white / n);
-    r.rms_px = std::sqrt(raw / n) * (s != nullptr ? s->config.pixel_sigma : 1.0);
-    result.residuals[name] = r;
+    r.rms_px = std::sqrt(raw / n);
+    result.residuals[c.camera] = r;
   }
   for (const auto& [name, ids] : inertial_ids) {
     SensorResiduals r;
@@ -375,10 +372,11 @@ void FinishResult(
         data_only.push_back(id);
     }
   }
-  const MarginalInformation info = ComputeMarginalInformation(problem, calib, all);
+  // One Schur complement of the data; the priors (on calibration blocks only) add to it.
+  const MarginalInformation info_data = ComputeMarginalInformation(problem, calib, data_only);
+  MarginalInformation info = info_data;
+  AddCalibrationInformation(problem, calib, prior_ids, &info);
   const CalibrationCovariance cov = InvertInformation(info);
-  const MarginalInformation info_data =
-      prior_ids.empty() ? info : ComputeMarginalInformation(problem, calib, data_only);
   const CalibrationCovariance cov_data = prior_ids.empty() ? cov : InvertInformation(info_data);
   if (info.nuisance_damping > 0.0)
     log(Fmt("  warning: the trajectory/bias states needed damping %.1e to be factored",

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
@@ -26,6 +27,7 @@ namespace ctcal {
 using residual_internal::Jacobian;
 }  // namespace ctcal
 
+#include "ctcal/calibrator/residuals/frame_corners_residual.h"
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
@@ -54,6 +56,14 @@ struct PreparedCamera {
   int invalid = 0;
 };
 
+// The whitened residual of every corner left in the problem (evaluated corner by corner, also
+// where the problem holds compressed frame blocks), for the residual statistics.
+struct CornerResiduals {
+  std::string camera;
+  std::vector<Eigen::Vector2d> whitened;
+  std::vector<double> sigma_px;
+};
+
 struct PreparedInertial {
   SensorState* state = nullptr;
   std::vector<ImuSample> imu;    // type imu, samples inside the trajectory's time range
@@ -75,7 +85,7 @@ struct Prepared {
 void FinishResult(
     ceres::Problem& problem, CalibrationState& state,
     const std::vector<ceres::ResidualBlockId>& prior_ids,
-    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& corner_ids,
+    const std::vector<CornerResiduals>& corners,
     const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
     const SplineCalibratorOptions& options, const CalibrationLog& log,
     SplineCalibrationResult* out);
@@ -182,10 +192,10 @@ class SplineProblem {
   // Builds a fresh problem from the current values (the residuals' segments follow the current
   // time offsets: this is also the re-bucketing).
   void Build(bool robust) {
+    robust_ = robust;
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_ = std::make_unique<ceres::Problem>(po);
-    corner_ids_.clear();
     inertial_ids_.clear();
     prior_ids_.clear();
     segments_.clear();
@@ -239,6 +249,15 @@ class SplineProblem {
   ceres::Solver::Summary Solve() {
     IterationLogger logger(log_);
     ceres::Solver::Options so = SolverOptions(options_, &logger);
+    if (robust_) {
+      // The robust solve only seeds the outlier gate and the plain solve: a relative cost change
+      // of 1e-6 (~0.2 at the demo's cost, i.e. well inside a sigma of every parameter) is enough.
+      so.function_tolerance = 1e-6;
+    } else {
+      // The plain solves start at the robust optimum: Gauss-Newton steps right away instead of
+      // the default damping 1e-4, which crawls along the weak directions (docs/performance.md).
+      so.initial_trust_region_radius = 1e8;
+    }
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem_.get(), &summary);
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
@@ -256,15 +275,13 @@ class SplineProblem {
       o.camera = cam.state->name();
       o.views = static_cast<int>(cam.views.size());
       o.invalid = cam.invalid;
-      const auto& ids = corner_ids_[c].second;
-      const auto& index = corner_index_[c];
-      o.corners = static_cast<int>(ids.size());
-      for (std::size_t i = 0; i < ids.size(); ++i) {
-        double r[2];
-        double cost = 0.0;
-        const bool ok = problem_->EvaluateResidualBlock(ids[i], false, &cost, r, nullptr);
-        if (!ok || r[0] * r[0] + r[1] * r[1] > gate) {
-          cam.removed[index[i]] = true;
+      for (std::size_t i = 0; i < cam.corners.size(); ++i) {
+        if (cam.removed[i])
+          continue;
+        ++o.corners;
+        Eigen::Vector2d e;
+        if (!EvaluateCorner(cam, i, &e) || e.squaredNorm() > gate) {
+          cam.removed[i] = true;
           ++o.removed;
         }
       }
@@ -285,7 +302,29 @@ class SplineProblem {
   }
 
   void Finish(SplineCalibrationResult* out) {
-    FinishResult(*problem_, state_, prior_ids_, corner_ids_, inertial_ids_, options_, log_, out);
+    std::vector<CornerResiduals> corners;
+    for (const PreparedCamera& cam : prep_.cameras) {
+      CornerResiduals c;
+      c.camera = cam.state->name();
+      for (std::size_t i = 0; i < cam.corners.size(); ++i) {
+        Eigen::Vector2d e;
+        if (cam.removed[i] || !EvaluateCorner(cam, i, &e))
+          continue;
+        c.whitened.push_back(e);
+        c.sigma_px.push_back(cam.corners[i].sigma_px);
+      }
+      corners.push_back(std::move(c));
+    }
+    FinishResult(*problem_, state_, prior_ids_, corners, inertial_ids_, options_, log_, out);
+  }
+
+  // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
+  // global-shutter camera (line_delay 0 and not estimated); rolling shutter reads every corner at
+  // its own row time, so its corners keep one block each.
+  bool Compressed(const PreparedCamera& cam) const {
+    const SensorState& s = *cam.state;
+    return options_.analytic && options_.compress_frames &&
+           !s.config.Estimates(EstimateItem::kLineDelay) && s.line_delay == 0.0;
   }
 
   ceres::Problem& problem() { return *problem_; }
@@ -328,11 +367,59 @@ class SplineProblem {
     return {b.Knot(segment), b.Knot(segment + 1)};
   }
 
+  // The corner's whitened residual at the current values, evaluated on its own (the statistics
+  // and the outlier gate need it per corner, also where the problem holds frame blocks).
+  bool EvaluateCorner(const PreparedCamera& cam, std::size_t i, Eigen::Vector2d* e) {
+    SensorState& s = *cam.state;
+    const int seg = SegmentOf(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay);
+    const std::unique_ptr<ceres::CostFunction> cost(
+        MakeCornerResidual<N, Rep>(true, s.camera->type(), cam.corners[i],
+                                   SegmentClock::At(cam.stamps[i], spline_.timing(), seg)));
+    typename CornerResidual<N, Rep>::Parameters p;
+    p.traj = TrajBlocks(seg);
+    p.q_B_C = s.q_B_S.data();
+    p.t_B_C = s.t_B_S.data();
+    p.time_offset = &s.time_offset;
+    p.line_delay = &s.line_delay;
+    p.params = s.camera->mutable_params();
+    const std::vector<double*> blocks = CornerResidual<N, Rep>::Blocks(p);
+    return cost->Evaluate(blocks.data(), e->data(), nullptr) && e->allFinite();
+  }
+
+  // The frames of a camera: [first, last) runs of its corners with one stamp.
+  template <class F>
+  static void ForEachFrame(const PreparedCamera& cam, F&& f) {
+    std::size_t first = 0;
+    while (first < cam.corners.size()) {
+      std::size_t last = first + 1;
+      while (last < cam.corners.size() && cam.stamps[last] == cam.stamps[first])
+        ++last;
+      f(first, last);
+      first = last;
+    }
+  }
+
+  // Whether frame [first, last) has a corner left in the problem.
+  static bool AnyLeft(const PreparedCamera& cam, std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      if (!cam.removed[i])
+        return true;
+    }
+    return false;
+  }
+
   // Visits the trajectory segment of every residual in the order Build adds them.
   template <class F>
   void ForEachSegment(F&& f) const {
     for (const PreparedCamera& cam : prep_.cameras) {
       const SensorState& s = *cam.state;
+      if (Compressed(cam)) {
+        ForEachFrame(cam, [&](std::size_t first, std::size_t last) {
+          if (AnyLeft(cam, first, last))
+            f(SegmentOf(cam.stamps[first], s.time_offset));
+        });
+        continue;
+      }
       for (std::size_t i = 0; i < cam.corners.size(); ++i) {
         if (cam.removed[i])
           continue;
@@ -348,10 +435,41 @@ class SplineProblem {
     }
   }
 
-  void AddCamera(PreparedCamera* cam, bool robust) {
+  // One compressed block per frame (frame_corners_residual.h); the robust stage's Huber weights
+  // are applied per corner inside the block.
+  void AddCameraFrames(PreparedCamera* cam, bool robust) {
     SensorState& s = *cam->state;
-    std::vector<ceres::ResidualBlockId> ids;
-    std::vector<std::size_t> index;
+    ForEachFrame(*cam, [&](std::size_t first, std::size_t last) {
+      if (!AnyLeft(*cam, first, last))
+        return;
+      const std::int64_t stamp = cam->stamps[first];
+      const int seg = SegmentOf(stamp, s.time_offset);
+      segments_.push_back(seg);
+      std::vector<CornerMeasurement> corners;
+      for (std::size_t i = first; i < last; ++i) {
+        if (!cam->removed[i])
+          corners.push_back(cam->corners[i]);
+      }
+      typename FrameCornersResidual<N, Rep>::Parameters p;
+      p.traj = TrajBlocks(seg);
+      p.q_B_C = s.q_B_S.data();
+      p.t_B_C = s.t_B_S.data();
+      p.time_offset = &s.time_offset;
+      p.params = s.camera->mutable_params();
+      problem_->AddResidualBlock(
+          MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners),
+                                           SegmentClock::At(stamp, spline_.timing(), seg),
+                                           robust ? options_.huber_threshold : 0.0),
+          nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
+    });
+  }
+
+  void AddCamera(PreparedCamera* cam, bool robust) {
+    if (Compressed(*cam)) {
+      AddCameraFrames(cam, robust);
+      return;
+    }
+    SensorState& s = *cam->state;
     ceres::LossFunction* loss = nullptr;
     for (std::size_t i = 0; i < cam->corners.size(); ++i) {
       if (cam->removed[i])
@@ -371,13 +489,8 @@ class SplineProblem {
           MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(), cam->corners[i], clock);
       if (robust)
         loss = new ceres::HuberLoss(options_.huber_threshold);
-      ids.push_back(problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p)));
-      index.push_back(i);
+      problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p));
     }
-    corner_ids_.emplace_back(s.name(), std::move(ids));
-    if (corner_index_.size() < prep_.cameras.size())
-      corner_index_.resize(prep_.cameras.size());
-    corner_index_[static_cast<std::size_t>(cam - prep_.cameras.data())] = std::move(index);
   }
 
   void AddInertial(PreparedInertial& in) {
@@ -625,11 +738,10 @@ class SplineProblem {
   std::unique_ptr<ceres::Problem> problem_;
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
-  std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> corner_ids_;
-  std::vector<std::vector<std::size_t>> corner_index_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<int> segments_;
+  bool robust_ = false;
 
   So3RightManifold so3_right_;
   Se3RightManifold se3_right_;
@@ -659,13 +771,26 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   double solve_seconds = 0.0;
   const auto solve = [&](const char* what) {
     log(what);
+    const std::clock_t cpu0 = std::clock();
     const ceres::Solver::Summary s = sp.Solve();
+    const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
     iterations += static_cast<int>(s.iterations.size()) - 1;
     solve_seconds += s.total_time_in_seconds;
-    char line[200];
+    char line[300];
     std::snprintf(line, sizeof line, "  %s: cost %.6e -> %.6e, %d iterations, %.2f s",
                   ceres::TerminationTypeToString(s.termination_type), s.initial_cost, s.final_cost,
                   static_cast<int>(s.iterations.size()) - 1, s.total_time_in_seconds);
+    log(line);
+    // Where the time went (wall, except the process CPU time over all threads): the profile of
+    // docs/performance.md.
+    std::snprintf(line, sizeof line,
+                  "    time: residual %.2f s, jacobian %.2f s, linear solver %.2f s, other %.2f s; "
+                  "%d residual blocks, %d rows; CPU %.2f s",
+                  s.residual_evaluation_time_in_seconds, s.jacobian_evaluation_time_in_seconds,
+                  s.linear_solver_time_in_seconds,
+                  s.total_time_in_seconds - s.residual_evaluation_time_in_seconds -
+                      s.jacobian_evaluation_time_in_seconds - s.linear_solver_time_in_seconds,
+                  s.num_residual_blocks, s.num_residuals, cpu);
     log(line);
     return s;
   };
@@ -703,8 +828,16 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   out->result.solver = summary;
   log("[6/6] covariance and residuals");
   const auto t_cov = Clock::now();
+  const std::clock_t cpu_cov = std::clock();
   sp.Finish(out);
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
+  {
+    char line[160];
+    std::snprintf(line, sizeof line, "  covariance and residual statistics: %.2f s (CPU %.2f s)",
+                  out->covariance_seconds,
+                  static_cast<double>(std::clock() - cpu_cov) / CLOCKS_PER_SEC);
+    log(line);
+  }
   if (options.report_data) {
     const auto t_report = Clock::now();
     out->report_data = SplineReportData(

@@ -58,6 +58,14 @@ TEST(KnotSpacing, SpacingFollowsTheFasterOfGyroAndAccel) {
   EXPECT_NEAR(bw.knot_spacing_s, 1.0 / (options.knots_per_period * 2.5), 0.003);
 }
 
+// 10 min at 1 kHz has 600001 = 19 * 23 * 1373 samples, a length on which the FFT is O(n * 1373)
+// (minutes); the analysed 5-smooth prefix gives the same bandwidth in milliseconds.
+TEST(KnotSpacing, LongRecordingOfAwkwardLengthIsAnalysedQuickly) {
+  const double rate = 1000.0;
+  const auto signal = Sines({1.0, 3.0}, rate, 600001, 0.0, 5);
+  EXPECT_NEAR(SignalBandwidthHz(signal, rate, 0.0, 0.995), 3.0, 0.05);
+}
+
 TEST(KnotSpacing, StaticDataGetsTheWidestSpacingAndBadInputThrows) {
   const int n = 100;
   std::vector<std::int64_t> t(n);

@@ -159,6 +159,41 @@ TEST(MarginalCovariance, PriorsDetermineANullDirectionUnlessExcluded) {
   EXPECT_TRUE(data_only.undetermined[1]);
 }
 
+// The data's Schur complement plus the priors' information (AddCalibrationInformation) equals the
+// Schur complement of data and priors together: the pipeline factors H_nn once.
+TEST(MarginalCovariance, PriorInformationAddsToTheDataSchurComplement) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss;
+  double x0[3] = {0, 0, 0}, x1[3] = {0, 0, 0}, y[2] = {0.1, -0.2};
+  ceres::Problem problem;
+  std::vector<ceres::ResidualBlockId> data, priors;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Matrix<double, 4, 8> A;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 8; ++j)
+        A(i, j) = gauss(rng);
+    }
+    data.push_back(
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LinearResidual, 4, 3, 3, 2>(
+                                     new LinearResidual(A, Eigen::Vector4d::Zero())),
+                                 nullptr, x0, x1, y));
+  }
+  priors.push_back(problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<ScalarPrior, 1, 2>(new ScalarPrior(0, 0.5)), nullptr, y));
+  priors.push_back(problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<ScalarPrior, 1, 2>(new ScalarPrior(1, 0.2)), nullptr, y));
+  const std::vector<CalibrationBlock> calib = {{y, {"y[0]", "y[1]"}, {1.0, 1.0}}};
+  const MarginalInformation all = ComputeMarginalInformation(problem, calib);
+  MarginalInformation sum = ComputeMarginalInformation(problem, calib, data);
+  const Eigen::MatrixXd data_only = sum.information;
+  AddCalibrationInformation(problem, calib, priors, &sum);
+  EXPECT_LT((sum.information - all.information).norm(), 1e-12 * all.information.norm());
+  EXPECT_NEAR((sum.information - data_only)(0, 0), 4.0, 1e-12);   // 1 / 0.5^2
+  EXPECT_NEAR((sum.information - data_only)(1, 1), 25.0, 1e-12);  // 1 / 0.2^2
+  // A "prior" on a nuisance block is refused.
+  EXPECT_THROW(AddCalibrationInformation(problem, calib, data, &sum), std::logic_error);
+}
+
 // A rotation measured directly with isotropic noise sigma (in the full-angle left perturbation)
 // must come back with exactly that sigma: checks the manifold's tangent convention end to end.
 TEST(MarginalCovariance, RotationSigmaUsesFullAngleLeftPerturbation) {

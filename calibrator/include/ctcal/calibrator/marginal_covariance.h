@@ -49,6 +49,14 @@ MarginalInformation ComputeMarginalInformation(
     ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
     const std::vector<ceres::ResidualBlockId>& residual_blocks = {});
 
+// Adds J^T J of `residual_blocks` that depend on calibration blocks only (the priors) to
+// info->information. Since such terms touch H_cc alone, the Schur complement of data + priors is
+// the data's plus theirs: one factorisation of H_nn serves both (throws std::runtime_error when
+// the residuals cannot be evaluated, std::logic_error when one touches a nuisance block).
+void AddCalibrationInformation(ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
+                               const std::vector<ceres::ResidualBlockId>& residual_blocks,
+                               MarginalInformation* info);
+
 struct CalibrationCovariance {
   Eigen::MatrixXd covariance;  // tangent space; pseudo-inverse on the determined subspace
   Eigen::VectorXd sigma;       // sqrt(diag(covariance)); +inf where undetermined

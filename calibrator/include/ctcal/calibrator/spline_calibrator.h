@@ -49,7 +49,10 @@ struct SplineCalibratorOptions {
   // Knot spacing of the (linear) bias splines, s.
   double bias_knot_spacing_s = 1.0;
   bool analytic = true;  // false: the same residuals through ceres::Jet (--autodiff)
-  int threads = 0;       // 0 = every core
+  // Global-shutter corners as one compressed block per frame (analytic path only); false: one
+  // block per corner (for benchmarks and tests of the compression).
+  bool compress_frames = true;
+  int threads = 0;  // 0 = every core
   int max_iterations = 50;
   // Huber threshold on the norm of a whitened corner residual during the robust solve.
   double huber_threshold = 3.0;

@@ -1,0 +1,101 @@
+// End-to-end speed of `ctcal calibrate --method spline` (CalibrateSpline, covariance included) on
+// the default rig: compressed per-frame camera blocks vs one block per corner, analytic vs
+// autodiff Jacobians, 1 vs 2 threads. Counters: LM iterations, seconds per iteration (wall),
+// covariance seconds, total seconds; the benchmark's own time is wall time (UseRealTime) and
+// process CPU time over all threads (MeasureProcessCPUTime).
+//
+// Data: CTCAL_BENCH_DATA=<folder written by `ctcal simulate`> (e.g. the demo's 60 s rig), else
+// a `full` scenario of CTCAL_BENCH_DURATION seconds (default 20, seed 2024, table4 guesses) is
+// simulated into a temporary folder first. Peak memory is measured on the command line instead
+// (`/usr/bin/time -v ctcal calibrate ...`, docs/performance.md).
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/rig_yaml.h"
+#include "ctcal/sim/dataset_writer.h"
+#include "ctcal/sim/default_rig.h"
+#include "ctcal/sim/perturb.h"
+#include "ctcal/sim/scenario.h"
+#include "ctcal/sim/simulator.h"
+
+namespace {
+
+using namespace ctcal;
+
+struct BenchData {
+  RigConfig rig;
+  std::map<std::string, SensorData> data;
+};
+
+const BenchData& Data() {
+  static const std::unique_ptr<BenchData> data = [] {
+    std::string dir;
+    if (const char* env = std::getenv("CTCAL_BENCH_DATA")) {
+      dir = env;
+    } else {
+      const char* d = std::getenv("CTCAL_BENCH_DURATION");
+      const double duration = d != nullptr ? std::atof(d) : 20.0;
+      dir = (std::filesystem::temp_directory_path() / "ctcal_bench_calibrate").string();
+      std::filesystem::remove_all(dir);
+      const RigConfig truth = sim::DefaultRig();
+      const auto motion = sim::MakeTrajectory(sim::Scenario::kFull, sim::SceneFor(truth.target));
+      const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(truth));
+      sim::SimOptions options;
+      options.duration = duration;
+      options.seed = 2024;
+      const sim::SimulatedDataset sim_data = sim::Simulate(truth, traj, options);
+      sim::Random rng = sim::Random(2024).Fork(0x9e7);
+      sim::WriteDataset(sim_data, sim::PerturbRig(truth, sim::Perturbation::kTable4, rng), dir,
+                        sim::WriteOptions());
+      std::fprintf(stderr, "bench_calibrate: simulated %.0f s into %s\n", duration, dir.c_str());
+    }
+    auto out = std::make_unique<BenchData>();
+    out->rig = LoadRig(dir + "/rig.yaml");
+    out->data = LoadDataset(dir, out->rig);
+    return out;
+  }();
+  return *data;
+}
+
+// args: threads, compressed (0/1), analytic (0/1).
+void BM_Calibrate(benchmark::State& state) {
+  const BenchData& d = Data();
+  SplineCalibratorOptions options;
+  options.threads = static_cast<int>(state.range(0));
+  options.compress_frames = state.range(1) != 0;
+  options.analytic = state.range(2) != 0;
+  SplineCalibrationResult result;
+  for (auto _ : state) {
+    result = CalibrateSpline(d.rig, d.data, options, [](const std::string&) {});
+    benchmark::DoNotOptimize(result.result.solver);
+  }
+  state.counters["iterations"] = result.iterations;
+  state.counters["s_per_iteration"] = result.seconds_per_iteration;
+  state.counters["solve_s"] = result.solve_seconds;
+  state.counters["covariance_s"] = result.covariance_seconds;
+  state.counters["total_s"] = result.total_seconds;
+  state.counters["knots"] = result.num_knots;
+}
+BENCHMARK(BM_Calibrate)
+    ->ArgNames({"threads", "per_frame", "analytic"})
+    ->Args({2, 1, 1})
+    ->Args({1, 1, 1})
+    ->Args({2, 0, 1})
+    ->Args({1, 0, 1})
+    ->Args({2, 0, 0})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

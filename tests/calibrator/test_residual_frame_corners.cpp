@@ -1,0 +1,282 @@
+// FrameCornersResidual (the compressed per-frame camera block) against the per-corner blocks it
+// replaces: its Jacobians match central differences on every block's manifold at a noise-free
+// frame; at a noisy frame (with outliers beyond the Huber threshold) its cost equals the sum of
+// the per-corner costs and its gradient and Gauss-Newton Hessian equal theirs, in L2 and Huber;
+// and one Levenberg-Marquardt iteration of Ceres over many frames moves every parameter to the
+// same value as the per-corner problem does.
+#include "ctcal/calibrator/residuals/frame_corners_residual.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+
+#include "residual_test_utils.h"
+
+namespace ctcal {
+namespace {
+
+using testing::TrajectoryConfig;
+
+constexpr std::int64_t kDtNs = 100'000'000;  // 0.1 s knots
+constexpr int kNumKnots = 12;
+
+template <typename C>
+class FrameCornersTest : public ::testing::Test {
+ protected:
+  static constexpr int N = C::N;
+  static constexpr Se3Representation Rep = C::Rep;
+  using Spline = Se3Spline<N, Rep>;
+  using Frame = FrameCornersResidual<N, Rep>;
+  using Corner = CornerResidual<N, Rep>;
+
+  FrameCornersTest() : spline_(testing::MakeTrajectory<N, Rep>(kNumKnots, kDtNs, 7)) {
+    std::mt19937 rng(11);
+    q_B_C_ = testing::RandomRotation(&rng, 0.5);
+    t_B_C_ = Eigen::Vector3d(0.05, -0.02, 0.01);
+  }
+
+  int SegmentAt(std::int64_t stamp_ns) const {
+    const double s = 1e-9 * static_cast<double>(stamp_ns - testing::kT0Ns) + offset_;
+    return std::min(static_cast<int>(s / (1e-9 * kDtNs)), spline_.NumSegments() - 1);
+  }
+
+  // The corners of a board seen at stamp_ns: a 6x5 grid ~1 m in front of the camera (tilted),
+  // projected at the true pose; pixel noise of sigma px and `outliers` corners moved by 15 sigma.
+  std::vector<CornerMeasurement> Corners(const CameraModel& camera, std::int64_t stamp_ns,
+                                         double noise_px, int outliers, unsigned seed) const {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    Se3Kinematics<double> k;
+    spline_.Evaluate(stamp_ns, offset_, 0, nullptr, &k);
+    const Eigen::Matrix3d R_B_C = q_B_C_.toRotationMatrix();
+    const Eigen::Matrix3d tilt = ExpSO3<double>(Eigen::Vector3d(0.3, -0.2, 0.1)).toRotationMatrix();
+    std::vector<CornerMeasurement> out;
+    for (int i = 0; i < 6; ++i) {
+      for (int j = 0; j < 5; ++j) {
+        const Eigen::Vector3d p_C =
+            tilt * Eigen::Vector3d(0.12 * (i - 2.5), 0.12 * (j - 2.0), 0.0) +
+            Eigen::Vector3d(0.0, 0.0, 1.0);
+        CornerMeasurement m;
+        m.p_W = k.R_W_B * (R_B_C * p_C + t_B_C_) + k.p_W_B;
+        m.sigma_px = 0.5 + 0.1 * ((i + j) % 3);
+        EXPECT_TRUE(camera.Project(p_C, &m.uv));
+        m.uv += noise_px * m.sigma_px * Eigen::Vector2d(gauss(rng), gauss(rng));
+        if (static_cast<int>(out.size()) < outliers)
+          m.uv += 15.0 * m.sigma_px * Eigen::Vector2d(0.8, -0.6);
+        out.push_back(m);
+      }
+    }
+    return out;
+  }
+
+  std::vector<double*> FrameBlocks(int seg, double* params) {
+    typename Frame::Parameters p;
+    p.traj = testing::SegmentBlocks(&spline_, seg);
+    p.q_B_C = q_B_C_.coeffs().data();
+    p.t_B_C = t_B_C_.data();
+    p.time_offset = &offset_;
+    p.params = params;
+    return Frame::Blocks(p);
+  }
+
+  std::vector<double*> CornerBlocks(int seg, double* params) {
+    typename Corner::Parameters p;
+    p.traj = testing::SegmentBlocks(&spline_, seg);
+    p.q_B_C = q_B_C_.coeffs().data();
+    p.t_B_C = t_B_C_.data();
+    p.time_offset = &offset_;
+    p.line_delay = &line_delay_;
+    p.params = params;
+    return Corner::Blocks(p);
+  }
+
+  std::vector<const ceres::Manifold*> FrameManifolds() const {
+    std::vector<const ceres::Manifold*> m = testing::TrajectoryManifolds<N, Rep>();
+    m.insert(m.end(), {testing::LeftRotationManifold(), nullptr, nullptr, nullptr});
+    return m;
+  }
+
+  // Adds every parameter block of the spline and the camera to P with its manifold.
+  void AddParameters(ceres::Problem* P, double* params, int num_params) {
+    for (int k = 0; k < spline_.NumKnots(); ++k) {
+      double* d = spline_.KnotData(k);
+      if constexpr (Rep == Se3Representation::kJoint) {
+        P->AddParameterBlock(d, 7, &se3_);
+      } else {
+        P->AddParameterBlock(d, 4, &so3_);
+        P->AddParameterBlock(d + 4, 3);
+      }
+    }
+    P->AddParameterBlock(q_B_C_.coeffs().data(), 4, &left_);
+    P->AddParameterBlock(t_B_C_.data(), 3);
+    P->AddParameterBlock(&offset_, 1);
+    P->AddParameterBlock(&line_delay_, 1);
+    P->SetParameterBlockConstant(&line_delay_);
+    P->AddParameterBlock(params, num_params);
+  }
+
+  // The frame block, or the per-corner blocks of the same corners, added to P.
+  void AddFrame(ceres::Problem* P, bool compressed, CameraModelType type,
+                const std::vector<CornerMeasurement>& corners, std::int64_t stamp, double huber,
+                double* params) {
+    const int seg = SegmentAt(stamp);
+    const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
+    if (compressed) {
+      P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners, clock, huber), nullptr,
+                          FrameBlocks(seg, params));
+      return;
+    }
+    for (const CornerMeasurement& m : corners) {
+      P->AddResidualBlock(MakeCornerResidual<N, Rep>(true, type, m, clock),
+                          huber > 0.0 ? new ceres::HuberLoss(huber) : nullptr,
+                          CornerBlocks(seg, params));
+    }
+  }
+
+  Spline spline_;
+  Eigen::Quaterniond q_B_C_;
+  Eigen::Vector3d t_B_C_;
+  double offset_ = 0.0031;
+  double line_delay_ = 0.0;
+  So3RightManifold so3_;
+  Se3RightManifold se3_;
+  So3LeftManifold left_;
+};
+
+using Configs = ::testing::Types<TrajectoryConfig<4, Se3Representation::kSplit>,
+                                 TrajectoryConfig<5, Se3Representation::kJoint>>;
+TYPED_TEST_SUITE(FrameCornersTest, Configs);
+
+constexpr CameraModelType kModels[] = {CameraModelType::kPinholeRadtan,
+                                       CameraModelType::kPinholeEquidistant,
+                                       CameraModelType::kDoubleSphere};
+
+// Noise-free frame (e = 0, where the Gauss-Newton Jacobian [R; 0] is the exact derivative): the
+// analytic Jacobian of every block equals central differences on its manifold.
+TYPED_TEST(FrameCornersTest, JacobiansMatchCentralDifferences) {
+  for (const CameraModelType type : kModels) {
+    Eigen::VectorXd params = testing::CameraParams(type);
+    const CameraModel camera(type, params, Eigen::Vector2i(640, 480));
+    const std::int64_t stamp = testing::kT0Ns + 437'000'000;
+    const auto corners = this->Corners(camera, stamp, 0.0, 0, 1);
+    const int seg = this->SegmentAt(stamp);
+    const std::unique_ptr<ceres::CostFunction> cost(
+        MakeFrameCornersResidual<TestFixture::N, TestFixture::Rep>(
+            type, corners, SegmentClock::At(stamp, this->spline_.timing(), seg), 0.0));
+    std::vector<double*> blocks = this->FrameBlocks(seg, params.data());
+    const auto manifolds = this->FrameManifolds();
+    const testing::Evaluation e = testing::EvaluateCost(*cost, blocks);
+    ASSERT_TRUE(e.ok);
+    EXPECT_LT(e.r.norm(), 1e-9);
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const Eigen::MatrixXd J = testing::TangentJacobian(e.J[b], manifolds[b], blocks[b]);
+      const Eigen::MatrixXd Jn = testing::NumericTangentJacobian(
+          *cost, blocks, static_cast<int>(b), manifolds[b], b + 1 == blocks.size() ? 1e-5 : 1e-6);
+      const double scale = std::max(1.0, testing::MaxAbs(J));
+      EXPECT_LT(testing::MaxAbs(J - Jn) / scale, 1e-6)
+          << CameraModelName(type) << " block " << b << "\nanalytic\n"
+          << J << "\nnumeric\n"
+          << Jn;
+      EXPECT_LT(testing::MaxAbs(J.bottomRows(1)), 1e-300);  // the remainder row
+    }
+  }
+}
+
+// Cost, gradient and Gauss-Newton Hessian (tangent space, as Ceres sees them) of one noisy frame
+// with three outliers: compressed == per corner, in L2 and with Huber (threshold 3).
+TYPED_TEST(FrameCornersTest, CostGradientAndHessianEqualPerCorner) {
+  for (const CameraModelType type : kModels) {
+    for (const double huber : {0.0, 3.0}) {
+      Eigen::VectorXd params = testing::CameraParams(type);
+      const CameraModel camera(type, params, Eigen::Vector2i(640, 480));
+      const std::int64_t stamp = testing::kT0Ns + 512'000'000;
+      const auto corners = this->Corners(camera, stamp, 1.0, 3, 2);
+      struct Eval {
+        double cost = 0.0;
+        std::vector<double> gradient;
+        Eigen::MatrixXd H;
+      } ev[2];
+      for (int compressed = 0; compressed < 2; ++compressed) {
+        ceres::Problem::Options po;
+        po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+        ceres::Problem P(po);
+        this->AddParameters(&P, params.data(), static_cast<int>(params.size()));
+        this->AddFrame(&P, compressed == 1, type, corners, stamp, huber, params.data());
+        ceres::CRSMatrix crs;
+        ASSERT_TRUE(P.Evaluate(ceres::Problem::EvaluateOptions(), &ev[compressed].cost, nullptr,
+                               &ev[compressed].gradient, &crs));
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+        for (int r = 0; r < crs.num_rows; ++r) {
+          for (int i = crs.rows[r]; i < crs.rows[r + 1]; ++i)
+            J(r, crs.cols[i]) = crs.values[i];
+        }
+        ev[compressed].H = J.transpose() * J;
+      }
+      EXPECT_GT(ev[0].cost, 30.0);  // noise and outliers: far from zero
+      EXPECT_NEAR(ev[1].cost, ev[0].cost, 1e-12 * ev[0].cost)
+          << CameraModelName(type) << " " << huber;
+      const Eigen::Map<const Eigen::VectorXd> g0(ev[0].gradient.data(), ev[0].gradient.size());
+      const Eigen::Map<const Eigen::VectorXd> g1(ev[1].gradient.data(), ev[1].gradient.size());
+      ASSERT_EQ(g0.size(), g1.size());
+      EXPECT_LT((g1 - g0).cwiseAbs().maxCoeff(), 1e-9 * g0.cwiseAbs().maxCoeff())
+          << CameraModelName(type) << " " << huber;
+      EXPECT_LT(testing::MaxAbs(ev[1].H - ev[0].H), 1e-9 * testing::MaxAbs(ev[0].H))
+          << CameraModelName(type) << " " << huber;
+    }
+  }
+}
+
+// One Levenberg-Marquardt iteration of Ceres over 40 noisy frames (spline knots and intrinsics
+// free, extrinsics and time offset held): the same step with compressed and per-corner blocks.
+TYPED_TEST(FrameCornersTest, OneSolverStepEqualsPerCorner) {
+  const CameraModelType type = CameraModelType::kPinholeRadtan;
+  const Eigen::VectorXd truth = testing::CameraParams(type);
+  const CameraModel camera(type, truth, Eigen::Vector2i(640, 480));
+  std::vector<std::pair<std::int64_t, std::vector<CornerMeasurement>>> frames;
+  const std::int64_t span = (kNumKnots - TestFixture::N) * kDtNs - 20'000'000;
+  for (int f = 0; f < 40; ++f) {
+    const std::int64_t stamp = testing::kT0Ns + 5'000'000 + f * (span / 40);
+    frames.emplace_back(stamp, this->Corners(camera, stamp, 1.0, f % 7 == 0 ? 1 : 0, 100 + f));
+  }
+  double* knots = this->spline_.KnotData(0);
+  const Eigen::Index num_knot_values = 7 * this->spline_.NumKnots();
+  const Eigen::VectorXd knots0 = Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
+  for (const double huber : {0.0, 3.0}) {
+    Eigen::VectorXd result[2];
+    for (int compressed = 0; compressed < 2; ++compressed) {
+      Eigen::Map<Eigen::VectorXd>(knots, num_knot_values) = knots0;
+      // Start away from the truth: intrinsics off by a few px / percent.
+      Eigen::VectorXd params = truth;
+      params.head<4>() += Eigen::Vector4d(3.0, -2.0, 1.5, -1.0);
+      params(4) += 0.01;
+      ceres::Problem::Options po;
+      po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+      ceres::Problem P(po);
+      this->AddParameters(&P, params.data(), static_cast<int>(params.size()));
+      for (const auto& [stamp, corners] : frames)
+        this->AddFrame(&P, compressed == 1, type, corners, stamp, huber, params.data());
+      P.SetParameterBlockConstant(this->q_B_C_.coeffs().data());
+      P.SetParameterBlockConstant(this->t_B_C_.data());
+      P.SetParameterBlockConstant(&this->offset_);
+      ceres::Solver::Options so;
+      so.linear_solver_type = ceres::DENSE_QR;
+      so.max_num_iterations = 1;
+      so.logging_type = ceres::SILENT;
+      ceres::Solver::Summary summary;
+      ceres::Solve(so, &P, &summary);
+      ASSERT_EQ(summary.iterations.size(), 2u);
+      EXPECT_TRUE(summary.iterations.back().step_is_successful);
+      result[compressed].resize(params.size() + num_knot_values);
+      result[compressed] << params, Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
+      // A real step: the cost fell by far more than the agreement tolerance.
+      EXPECT_LT(summary.final_cost, 0.9 * summary.initial_cost);
+    }
+    // Both moved (the intrinsics by ~px) and agree to 1e-9 of the largest value (the focal).
+    EXPECT_LT((result[1] - result[0]).cwiseAbs().maxCoeff(), 1e-9 * truth.cwiseAbs().maxCoeff())
+        << "huber " << huber;
+  }
+}
+
+}  // namespace
+}  // namespace ctcal
