@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -148,6 +149,27 @@ Observability NumericObservability(const MarginalInformation& information,
       AddOnce(&obs.weak, ListName(information.names[i]));
   }
   return obs;
+}
+
+std::vector<std::string> MergePredictedWeakIntoUnobservable(Observability* obs, RigConfig* result) {
+  std::vector<std::string> moved;
+  for (const std::string& name : obs->predicted_unobservable) {
+    const auto w = std::find(obs->weak.begin(), obs->weak.end(), name);
+    if (w == obs->weak.end())
+      continue;
+    obs->weak.erase(w);
+    AddOnce(&obs->unobservable, name);
+    moved.push_back(name);
+    const std::optional<ScalarParameter> p = FindParameter(*result, name);
+    if (!p || p->sensor.empty())
+      continue;
+    SensorConfig* sensor = result->Find(p->sensor);
+    const auto it = sensor->sigma.values.find(p->key);
+    const std::size_t i = p->index < 0 ? 0 : static_cast<std::size_t>(p->index);
+    if (it != sensor->sigma.values.end() && i < it->second.size())
+      it->second[i] = std::numeric_limits<double>::infinity();
+  }
+  return moved;
 }
 
 void ReportObservability(const RigConfig& result, const Observability& observability,

@@ -470,6 +470,7 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
   }
   if (out.result.observability) {
     AnalyseMotion(rig, data, MotionOptions{}, &*out.result.observability);
+    MergePredictedWeakIntoUnobservable(&*out.result.observability, &out.result);
     ReportObservability(out.result, *out.result.observability, log, &out.warnings);
   }
   out.total_seconds =

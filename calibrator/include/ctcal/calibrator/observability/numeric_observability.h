@@ -48,6 +48,18 @@ Observability NumericObservability(const MarginalInformation& information,
                                    const CalibrationCovariance& covariance, const RigConfig& rig,
                                    double duration_s, double weak_factor = kWeakFactor);
 
+// A symmetry the motion tables predict holds for the true motion, but the estimated trajectory
+// also fits the sensors' noise, and that fit lends the symmetric direction a sliver of
+// information (1e-8..1e-6 of the largest eigenvalue, above the null rule): such a parameter comes
+// out `weak`, not null (docs/observability.md). When the motion analysis has found the primitive
+// (its statistical test says the motion is the degenerate one within the sensor noise) and the
+// numeric analysis finds the parameter weak, its information is the noise's, not the motion's:
+// the parameter moves from `weak` to `unobservable` and its sigma in `result` becomes .inf (SPEC
+// section 7: a quantity the data do not determine; as for the numerically null ones, a prior
+// does not make it determined). Returns the names moved.
+std::vector<std::string> MergePredictedWeakIntoUnobservable(Observability* observability,
+                                                            RigConfig* result);
+
 // The terminal's observability block: the numeric and the analytic lists side by side, then
 // one warning line per unobservable or weak estimated parameter with the motion that would fix
 // it (warnings.h). Each warning is also appended to *warnings when it is not null.
