@@ -64,9 +64,17 @@ TEST(CalibrateMethods, BothWritesTwoHonestResultsAndTheCrossCheck) {
   EXPECT_GE(within3, static_cast<int>(0.95 * finite));
   EXPECT_GT(rms, 0.6);
   EXPECT_LT(rms, 1.5);
+  // Corners: whitened RMS ~1. The preintegration factors' is below 1 by design (each keyframe's
+  // pose and velocity absorb most of a 25 ms factor's residual; docs/discrete.md): 0.59 / 0.60 /
+  // 0.75 measured for imu0 / imu1 / gyro0.
   for (const auto& [name, res] : discrete.residuals) {
     ASSERT_TRUE(res.rms_whitened.has_value()) << name;
-    EXPECT_NEAR(*res.rms_whitened, 1.0, 0.15) << name;
+    if (name.rfind("cam", 0) == 0) {
+      EXPECT_NEAR(*res.rms_whitened, 1.0, 0.1) << name;
+    } else {
+      EXPECT_GT(*res.rms_whitened, 0.45) << name;
+      EXPECT_LT(*res.rms_whitened, 0.9) << name;
+    }
   }
 
   // crosscheck.yaml: flagged names and rows of the documented keys; the ratio is |difference|
