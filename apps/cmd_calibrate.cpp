@@ -1,6 +1,8 @@
-// `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline] [--threads N]` (SPEC
-// section 8): loads the rig and the dataset, runs the continuous-time calibrator
-// (calibrator/spline_calibrator.h) and writes OUT/result.yaml, the Kalibr files and OUT/log.txt.
+// `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both]
+// [--threads N]` (SPEC section 8): loads the rig and the dataset, runs the continuous-time
+// calibrator (calibrator/spline_calibrator.h), the discrete one (discrete_calibrator.h) or both
+// with a cross-check, and writes OUT/result.yaml, the Kalibr files and OUT/log.txt (`both`:
+// OUT/spline/, OUT/discrete/, OUT/crosscheck.yaml).
 #include <filesystem>
 #include <fstream>
 #include <iostream>
