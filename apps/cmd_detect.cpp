@@ -37,6 +37,7 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
   for (const ImageEntry& image : images)
     paths.push_back((camera_dir / "data" / image.filename).string());
 
+  // A live counter on a terminal; in a log, a line per tenth of the images.
   const bool tty = isatty(fileno(stderr));
   const std::vector<DetectionResult> results =
       detector.DetectFiles(paths, [&](size_t done, size_t total) {
@@ -44,6 +45,8 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
           std::fprintf(stderr, "\r%s: %zu/%zu images", camera.c_str(), done, total);
           if (done == total)
             std::fprintf(stderr, "\n");
+        } else if (!tty && total >= 50 && done % (total / 10) == 0) {
+          std::fprintf(stderr, "%s: %zu/%zu images\n", camera.c_str(), done, total);
         }
       });
 

@@ -24,9 +24,6 @@
 namespace ctcal::app {
 namespace {
 
-// The perturbation draws from its own stream of the seed, independent of the measurements'.
-constexpr std::uint64_t kPerturbationStream = 0x9e7;
-
 std::string ScenarioList() {
   std::string all;
   for (const std::string& n : sim::ScenarioNames())
@@ -129,7 +126,7 @@ int RunSimulate(int argc, char** argv) {
     };
     const sim::SimulatedDataset data = sim::Simulate(rig, traj, options);
 
-    sim::Random perturb_rng = sim::Random(seed).Fork(kPerturbationStream);
+    sim::Random perturb_rng = sim::Random(seed).Fork(sim::kPerturbationStream);
     const RigConfig guess = sim::PerturbRig(rig, perturbation, perturb_rng);
 
     sim::WriteOptions write_options;

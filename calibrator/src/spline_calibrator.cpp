@@ -10,6 +10,8 @@
 
 #include "ctcal/calibrator/knot_spacing.h"
 #include "ctcal/calibrator/marginal_covariance.h"
+#include "ctcal/calibrator/observability/motion_prediction.h"
+#include "ctcal/calibrator/observability/numeric_observability.h"
 #include "spline_problem_impl.h"
 
 namespace ctcal {
@@ -389,30 +391,16 @@ void FinishResult(
     log(Fmt("  warning: the trajectory/bias states needed damping %.1e to be factored",
             info.nuisance_damping));
 
-  Observability obs;
   std::vector<bool> undetermined(static_cast<std::size_t>(cov.sigma.size()), false);
-  for (std::size_t i = 0; i < undetermined.size(); ++i) {
+  for (std::size_t i = 0; i < undetermined.size(); ++i)
     undetermined[i] = cov.undetermined[i] || cov_data.undetermined[i];
-    if (undetermined[i]) {
-      std::string name = info.names[i];
-      if (name.rfind("gravity_W.direction", 0) == 0)
-        name = "gravity_W";
-      if (std::find(obs.unobservable.begin(), obs.unobservable.end(), name) ==
-          obs.unobservable.end())
-        obs.unobservable.push_back(name);
-    }
-  }
-  for (const int col : cov_data.null_directions) {
-    ObservabilityDirection dir;
-    dir.eigenvalue = cov_data.scaled_eigenvalues(col);
-    for (Eigen::Index i = 0; i < cov_data.scaled_eigenvectors.rows(); ++i) {
-      const double l = cov_data.scaled_eigenvectors(i, col);
-      if (std::abs(l) > 0.1)
-        dir.parameters.push_back(ParameterLoading{info_data.names[static_cast<std::size_t>(i)], l});
-    }
-    obs.directions.push_back(dir);
-  }
-  result.observability = obs;
+  // Observability of the data alone (numeric_observability.h); the motion half is added by
+  // CalibrateSpline, which has the raw data.
+  const double duration_s = (out->num_knots - options.order + 1) * out->knot_spacing_s;
+  result.observability = NumericObservability(info_data, cov_data, result, duration_s);
+  out->covariance_names = info.names;
+  out->covariance = cov.covariance;
+  out->data_sigma = cov_data.sigma;
 
   const double inf = std::numeric_limits<double>::infinity();
   int offset = 0;
@@ -441,14 +429,6 @@ void FinishResult(
       }
     }
     offset += b->tangent_size;
-  }
-  if (!obs.unobservable.empty()) {
-    std::string names;
-    for (const std::string& n : obs.unobservable)
-      names += " " + n;
-    const std::string w = "warning: the data do not determine:" + names + " (sigma .inf)";
-    log("  " + w);
-    out->warnings.push_back(w);
   }
 }
 
@@ -494,6 +474,10 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
       split ? RunPipeline<6, Se3Representation::kSplit>(&prep, options, log, &out)
             : RunPipeline<6, Se3Representation::kJoint>(&prep, options, log, &out);
       break;
+  }
+  if (out.result.observability) {
+    AnalyseMotion(rig, data, MotionOptions{}, &*out.result.observability);
+    ReportObservability(out.result, *out.result.observability, log, &out.warnings);
   }
   out.total_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -91,4 +91,26 @@ void WriteDataset(const SimulatedDataset& data, const RigConfig& guess, const st
   SaveTargetConfig(data.truth.target, (root / "target.yaml").string());
 }
 
+std::map<std::string, SensorData> ToSensorData(const SimulatedDataset& data) {
+  std::map<std::string, SensorData> out;
+  for (const InertialData& d : data.inertial) {
+    SensorData& s = out[d.sensor];
+    for (const InertialSample& m : d.samples) {
+      if (d.has_accel)
+        s.imu.push_back({m.t_ns, m.w_m, m.a_m});
+      else
+        s.gyro.push_back({m.t_ns, m.w_m});
+    }
+  }
+  for (const CameraData& d : data.cameras) {
+    SensorData& s = out[d.sensor];
+    s.has_corners = true;
+    for (const std::int64_t ns : d.frames_ns)
+      s.images.push_back({ns, std::to_string(ns) + ".png"});
+    for (const SimulatedCorner& c : d.corners)
+      s.corners.push_back({c.t_ns, c.corner_id, c.uv.x(), c.uv.y(), c.sigma});
+  }
+  return out;
+}
+
 }  // namespace ctcal::sim

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -31,6 +32,8 @@ const char* ToString(RejectReason reason) {
       return "sub-pixel refinement jumped";
     case RejectReason::kBadBorder:
       return "black border not as printed (wrong blackTagBorder?)";
+    case RejectReason::kTooSmall:
+      return "too small to refine";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -67,6 +70,30 @@ cv::Mat ToGray8(const cv::Mat& image) {
   return out;
 }
 
+// Immerkaer's estimate (Fast noise variance estimation, CVIU 1996), made robust to edges by a
+// median: the mask [1 -2 1; -2 4 -2; 1 -2 1] cancels every locally linear intensity, leaving
+// noise of variance 36 sigma^2; the median of its magnitude over the image is 0.6745 * 6 sigma.
+double EstimateNoiseSigma(const cv::Mat& gray) {
+  CV_Assert(gray.type() == CV_8UC1);
+  if (gray.rows < 3 || gray.cols < 3)
+    return 0.0;
+  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(gray, response, CV_16S, mask);
+  std::vector<int64_t> histogram(16 * 255 + 1, 0);
+  for (int v = 1; v + 1 < response.rows; ++v) {
+    const int16_t* row = response.ptr<int16_t>(v);
+    for (int u = 1; u + 1 < response.cols; ++u)
+      ++histogram[static_cast<size_t>(std::abs(row[u]))];
+  }
+  const int64_t half = static_cast<int64_t>(response.rows - 2) * (response.cols - 2) / 2;
+  int64_t count = 0;
+  size_t median = 0;
+  while (median + 1 < histogram.size() && count + histogram[median] <= half)
+    count += histogram[median++];
+  return 1.4826 * static_cast<double>(median) / 6.0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sub-pixel refinement.
 //
@@ -75,13 +102,26 @@ cv::Mat ToGray8(const cv::Mat& image) {
 // with Gaussian weights w gives the normal equations
 //   G q = sum_i w_i g_i g_i^T p_i,   G = sum_i w_i g_i g_i^T,
 // solved repeatedly with the window re-centred on q (the gradients are re-sampled by bilinear
-// interpolation at the new sub-pixel positions). The residuals r_i = g_i^T (p_i - q) measure how
-// well the corner model fits; their sandwich estimate
-//   Cov(q) = G^-1 (sum_i w_i^2 r_i^2 g_i g_i^T) G^-1
-// is the reported uncertainty (no assumption of equal noise across the window).
-bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px) {
+// interpolation at the new sub-pixel positions).
+//
+// Uncertainty: at the solution F(q) = sum_i w_i g_i g_i^T d_i = 0 with d_i = p_i - q. Image noise
+// perturbs each gradient by dg_i; to first order dF = sum_i w_i (dg_i g_i^T d_i + g_i dg_i^T d_i),
+// whose first term vanishes with the model residual g_i^T d_i = 0, and dF/dq = -G, so
+//   dq = G^-1 sum_i w_i g_i d_i^T dg_i.
+// Central differences of white noise of sigma_n grey levels have Cov(dg_i) = sigma_n^2 / 2 I
+// (neighbouring gradients' correlation neglected), hence
+//   Cov(q) = sigma_n^2 / 2 G^-1 (sum_i w_i^2 |d_i|^2 g_i g_i^T) G^-1.
+// (The sandwich of the model residuals r_i = g_i^T d_i instead measured how far a blurred
+// X-junction is from the ideal one, symmetric misfit that does not move q: 7x the scatter.)
+bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
+                  double noise_sigma) {
   CV_Assert(gray.type() == CV_8UC1);
-  const int h = std::max(1, half_window);
+  // Near the image border the window shrinks to fit rather than give up on the corner.
+  const double room = std::min(std::min(uv->x(), uv->y()),
+                               std::min(gray.cols - 1.0 - uv->x(), gray.rows - 1.0 - uv->y()));
+  if (!(room >= 4.0))
+    return false;
+  const int h = std::max(1, std::min(half_window, static_cast<int>(room) - 3));
   const int n = 2 * h + 3;  // patch with a one-pixel rim for central differences
   const double weight_sigma = 0.5 * (h + 1);
   std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
@@ -127,7 +167,8 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     q += step;
     if ((q - start).norm() > h + 1.0)
       return false;
-    if (step.squaredNorm() < 1e-8) {
+    // Converged at a thousandth of a pixel: the bilinear re-sampling makes smaller steps noise.
+    if (step.squaredNorm() < 1e-6) {
       converged = true;
       break;
     }
@@ -147,11 +188,10 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
         const int c = dx + h + 1;
         const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
         const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
-        const double r = g.dot(Eigen::Vector2d(dx, dy));
-        meat += (w * w * r * r) * g * g.transpose();
+        meat += (w * w * (dx * dx + dy * dy)) * g * g.transpose();
       }
     }
-    const Eigen::Matrix2d cov = G_inv * meat * G_inv;
+    const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
     *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
   }
   *uv = q;
@@ -306,6 +346,274 @@ void UndoThinning(TagDetection* tag) {
   }
 }
 
+// Tag id -> its four corners (tag order, px).
+using TagCorners = std::map<int, std::array<Eigen::Vector2d, 4>>;
+
+// Whether a tag of the board that is not in `tags` can be in the image: a homography fitted to
+// the tags found (board plane -> image) predicts where the others are, and a tag counts when its
+// four corners fall inside the image grown by `margin_px` (negative: shrunk). The homography
+// ignores lens distortion, which the caller's margin allows for. Extra passes only pay when a
+// tag is missing; a partial view whose missing tags all fall outside the frame is done.
+bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size& image_size,
+                      double margin_px) {
+  std::vector<cv::Point2f> board_xy, image_xy;
+  for (const auto& [id, corners] : tags) {
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    for (size_t k = 0; k < 4; ++k) {
+      const Eigen::Vector3d& p = board.Corner(ids[k]);
+      board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+      image_xy.emplace_back(static_cast<float>(corners[k].x()), static_cast<float>(corners[k].y()));
+    }
+  }
+  if (board_xy.size() < 8)
+    return true;  // too little to predict from
+  const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
+  if (H.empty())
+    return true;
+  for (int id = 0; id < board.NumTags(); ++id) {
+    if (tags.count(id))
+      continue;
+    std::vector<cv::Point2f> corners;
+    for (int k : board.TagCornerIds(id))
+      corners.emplace_back(static_cast<float>(board.Corner(k).x()),
+                           static_cast<float>(board.Corner(k).y()));
+    cv::perspectiveTransform(corners, corners, H);
+    if (std::all_of(corners.begin(), corners.end(), [&](const cv::Point2f& c) {
+          return c.x >= -margin_px && c.y >= -margin_px &&
+                 c.x <= image_size.width - 1 + margin_px &&
+                 c.y <= image_size.height - 1 + margin_px;
+        }))
+      return true;
+  }
+  return false;
+}
+
+// Bilinear interpolation of an 8-bit image at (x, y) (pixel centres at integers); -1 outside.
+double SampleBilinear(const cv::Mat& gray, double x, double y) {
+  if (!(x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.0 && y <= gray.rows - 1.0))
+    return -1.0;
+  const int x0 = std::min(static_cast<int>(x), gray.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), gray.rows - 2);
+  const double fx = x - x0, fy = y - y0;
+  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
+  const uint8_t* r1 = gray.ptr<uint8_t>(y0 + 1) + x0;
+  return (1.0 - fy) * ((1.0 - fx) * r0[0] + fx * r0[1]) + fy * ((1.0 - fx) * r1[0] + fx * r1[1]);
+}
+
+// Reads tag `id` at the given corners (tag order) and compares it with what the board prints
+// there: the number of the 36 data bits that differ from Kalibr's code word of `id`, or -1 if
+// the view is no tag of this border width at all (no contrast, or a border ring not black).
+// Each cell is sampled at its centre through the homography of the four corners (tag cells,
+// x right and y down the printed tag -> pixels); the threshold is the midpoint between the
+// black border and the white gap outside the tag.
+int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                    const Board& board, int id) {
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const float n = static_cast<float>(cells);
+  const std::vector<cv::Point2f> tag_cells = {{0.0f, n}, {n, n}, {n, 0.0f}, {0.0f, 0.0f}};
+  std::vector<cv::Point2f> pixels;
+  for (const Eigen::Vector2d& c : corners)
+    pixels.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+  const cv::Mat H = cv::getPerspectiveTransform(tag_cells, pixels);
+  const auto sample = [&](double x, double y) {
+    const double w = H.at<double>(2, 0) * x + H.at<double>(2, 1) * y + H.at<double>(2, 2);
+    return SampleBilinear(
+        gray, (H.at<double>(0, 0) * x + H.at<double>(0, 1) * y + H.at<double>(0, 2)) / w,
+        (H.at<double>(1, 0) * x + H.at<double>(1, 1) * y + H.at<double>(1, 2)) / w);
+  };
+  std::vector<double> ring_values, white_values;
+  for (int a = 0; a < cells; ++a) {
+    for (int b = 0; b < cells; ++b) {
+      const bool in_border = a < border || b < border || a >= cells - border || b >= cells - border;
+      if (in_border)
+        ring_values.push_back(sample(a + 0.5, b + 0.5));
+    }
+  }
+  // The gap beside each edge, away from the corner squares.
+  for (int a = 2; a < cells - 2; ++a) {
+    for (const auto& [x, y] : std::vector<std::pair<double, double>>{
+             {a + 0.5, -0.5}, {a + 0.5, cells + 0.5}, {-0.5, a + 0.5}, {cells + 0.5, a + 0.5}})
+      white_values.push_back(sample(x, y));
+  }
+  if (std::count(ring_values.begin(), ring_values.end(), -1.0) > 0 ||
+      std::count(white_values.begin(), white_values.end(), -1.0) > 0)
+    return -1;  // partly outside the image
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double black = median(ring_values);
+  const double white = median(white_values);
+  // A tag reads with at least this contrast (grey levels) on any usable image.
+  if (white - black < 15.0)
+    return -1;
+  const double threshold = 0.5 * (black + white);
+  const auto dark_border = std::count_if(ring_values.begin(), ring_values.end(),
+                                         [threshold](double v) { return v < threshold; });
+  if (dark_border < static_cast<long>(0.9 * static_cast<double>(ring_values.size())))
+    return -1;
+  const uint64_t code = board.TagCode(id);
+  int distance = 0;
+  for (int row = 0; row < Board::kTagDataBits; ++row) {
+    for (int col = 0; col < Board::kTagDataBits; ++col) {
+      const bool is_white = sample(border + col + 0.5, border + row + 0.5) > threshold;
+      const int bit =
+          Board::kTagDataBits * Board::kTagDataBits - 1 - (row * Board::kTagDataBits + col);
+      distance += is_white != (((code >> bit) & 1u) != 0u) ? 1 : 0;
+    }
+  }
+  return distance;
+}
+
+// Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
+// is the black border's width (and the corner square); the window stays inside it, and is at
+// least Kalibr's 5 x 5.
+int TagCornerHalfWindow(int black_border, double bit_px) {
+  return std::clamp(static_cast<int>(0.8 * black_border * bit_px), 2, 12);
+}
+
+// The tags whose four corners are all among `corners`.
+TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& corners) {
+  std::map<int, Eigen::Vector2d> uv_of;
+  for (const DetectedCorner& c : corners)
+    uv_of[c.id] = c.uv;
+  TagCorners tags;
+  for (int id = 0; id < board.NumTags(); ++id) {
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    if (std::all_of(ids.begin(), ids.end(), [&](int k) { return uv_of.count(k) > 0; })) {
+      std::array<Eigen::Vector2d, 4> c;
+      for (size_t k = 0; k < 4; ++k)
+        c[k] = uv_of.at(ids[k]);
+      tags[id] = c;
+    }
+  }
+  return tags;
+}
+
+// Grid completion. libapriltag misses tags that a person sees at once: under fisheye distortion
+// their edges bend and its straight-edge quads fail or miss the corners by several pixels (the
+// refinement then jumps), and bridges to the corner squares hide some. The board knows where a
+// missing tag must be: each of its corners is predicted by the homography of the nearest
+// accepted neighbour tag (3 x 3 tag neighbourhood, four exact points: the more local, the less
+// lens distortion the model misses) and refined in the image (jump <= 1 bit: inside the tag the
+// next X-junction is two bits away, outside the corner square is three). The tag counts only if
+// its border is black and its 36 data bits read as the code word printed for its id within 2
+// bits (tag36h11's minimum distance is 11, so a wrong place or id does not pass). Recovered tags
+// are neighbours in the next round.
+// `excluded`: ids a rule already decided on (duplicates, near the border, another border).
+void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
+                  const DetectorOptions& options, const std::set<int>& excluded,
+                  DetectionResult* result) {
+  TagCorners found = TagsOfCorners(board, result->corners);
+  if (found.empty())
+    return;
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const int rows = board.tag_rows(), cols = board.tag_cols();
+  const double margin = options.min_border_distance_px;
+  const auto inside = [&](const Eigen::Vector2d& uv) {
+    return uv.x() >= margin && uv.y() >= margin && uv.x() <= gray.cols - 1 - margin &&
+           uv.y() <= gray.rows - 1 - margin;
+  };
+  for (bool grown = true; grown;) {
+    grown = false;
+    for (int id = 0; id < board.NumTags(); ++id) {
+      if (found.count(id) || excluded.count(id))
+        continue;
+      // Each corner from the homography of the nearest accepted neighbour (four exact points):
+      // the more local the model, the less lens distortion it misses.
+      const std::array<int, 4> ids = board.TagCornerIds(id);
+      std::vector<cv::Point2f> predicted;
+      for (int k : ids) {
+        const Eigen::Vector2d p_W = board.Corner(k).head<2>();
+        double nearest = std::numeric_limits<double>::infinity();
+        const std::array<Eigen::Vector2d, 4>* neighbour_uv = nullptr;
+        std::array<int, 4> neighbour_ids{};
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int r = id / cols + dr, c = id % cols + dc;
+            if (r < 0 || c < 0 || r >= rows || c >= cols || !found.count(r * cols + c))
+              continue;
+            const std::array<int, 4> n_ids = board.TagCornerIds(r * cols + c);
+            const double d =
+                (0.5 * (board.Corner(n_ids[0]) + board.Corner(n_ids[2])).head<2>() - p_W).norm();
+            if (d < nearest) {
+              nearest = d;
+              neighbour_uv = &found.at(r * cols + c);
+              neighbour_ids = n_ids;
+            }
+          }
+        }
+        if (neighbour_uv == nullptr)
+          break;
+        std::vector<cv::Point2f> board_xy, image_xy;
+        for (size_t j = 0; j < 4; ++j) {
+          const Eigen::Vector3d& q = board.Corner(neighbour_ids[j]);
+          board_xy.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+          image_xy.emplace_back(static_cast<float>((*neighbour_uv)[j].x()),
+                                static_cast<float>((*neighbour_uv)[j].y()));
+        }
+        std::vector<cv::Point2f> one = {
+            cv::Point2f(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()))};
+        cv::perspectiveTransform(one, one, cv::getPerspectiveTransform(board_xy, image_xy));
+        predicted.push_back(one.front());
+      }
+      if (predicted.size() != 4)
+        continue;
+      // The shortest edge sets the scale: a foreshortened tag's bits are narrow across it.
+      double edge = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < 4; ++k)
+        edge = std::min(edge, static_cast<double>(cv::norm(predicted[k] - predicted[(k + 1) % 4])));
+      const double bit_px = edge / cells;
+      if (!(bit_px >= options.min_bit_px))
+        continue;
+      const int half_window = TagCornerHalfWindow(border, bit_px);
+      std::array<DetectedCorner, 4> refined;
+      std::array<Eigen::Vector2d, 4> uv;
+      bool ok = true;
+      for (size_t k = 0; k < 4 && ok; ++k) {
+        const Eigen::Vector2d start(predicted[k].x, predicted[k].y);
+        uv[k] = start;
+        double sigma = 0.0;
+        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
+             (uv[k] - start).norm() <= bit_px && inside(uv[k]);
+        refined[k].id = ids[k];
+        refined[k].uv = uv[k];
+        refined[k].sigma = std::max(options.min_sigma_px, sigma);
+      }
+      if (!ok)
+        continue;
+      const int distance = TagCodeDistance(gray, uv, board, id);
+      if (distance < 0 || distance > 2)
+        continue;
+      found[id] = uv;
+      result->corners.insert(result->corners.end(), refined.begin(), refined.end());
+      ++result->tags_accepted;
+      // Its quad was libapriltag's and too far off; the grid's prediction was not.
+      result->rejected.erase(std::remove_if(result->rejected.begin(), result->rejected.end(),
+                                            [id](const TagRejection& r) { return r.tag_id == id; }),
+                             result->rejected.end());
+      grown = true;
+    }
+  }
+}
+
+// One libapriltag pass over `image` (the original or a modified copy of `gray`); tags whose
+// second border ring is not black in `gray` go to `bad_border` instead.
+std::vector<TagDetection> RunCheckingBorder(apriltag_detector_t* detector, const cv::Mat& image,
+                                            const cv::Mat& gray, const Board& board,
+                                            std::set<int>* bad_border) {
+  std::vector<TagDetection> kept;
+  for (const TagDetection& tag : RunApriltag(detector, image)) {
+    if (InnerBorderIsBlack(gray, tag, board.config().black_tag_border))
+      kept.push_back(tag);
+    else
+      bad_border->insert(tag.id);
+  }
+  return kept;
+}
+
 // Kalibr's black squares touch every tag at its four corners. Blurred and thresholded, the touch
 // points become black bridges: the tag's black square merges with its neighbours into one
 // component and libapriltag's quad search (black/white boundary clusters) finds no quad. Each
@@ -313,18 +621,12 @@ void UndoThinning(TagDetection* tag) {
 // painting them white frees the neighbours, which the next pass finds, and so on. libapriltag
 // fits its corners to whole edges, so the small bite this takes out of a tag's corner does not
 // move them; the sub-pixel refinement runs on the untouched image anyway.
+// `first_pass`: the tags of one RunCheckingBorder on `gray` already made (nullptr: run it).
 std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv::Mat& gray,
-                                         const Board& board, std::set<int>* bad_border) {
+                                         const Board& board, std::set<int>* bad_border,
+                                         const std::vector<TagDetection>* first_pass) {
   auto run = [&](const cv::Mat& image) {
-    std::vector<TagDetection> tags = RunApriltag(detector, image);
-    std::vector<TagDetection> kept;
-    for (const TagDetection& tag : tags) {
-      if (InnerBorderIsBlack(gray, tag, board.config().black_tag_border))
-        kept.push_back(tag);
-      else
-        bad_border->insert(tag.id);
-    }
-    return kept;
+    return RunCheckingBorder(detector, image, gray, board, bad_border);
   };
   // Tags by id; a run that decodes an id twice keeps both (the duplicate rule needs them).
   // `confirmed` come from the image itself or its painted copy, `seeds` from the thinned copy.
@@ -348,46 +650,15 @@ std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv
       n += entry.first < board.NumTags() ? 1 : 0;
     return n;
   };
-  merge(run(gray), &confirmed);
-  // Extra passes only pay when a missing tag can be in the image: a homography fitted to the
-  // tags found (board plane -> image) predicts where the others are; a partial view whose
-  // missing tags all fall outside the frame is done after one pass.
+  merge(first_pass != nullptr ? *first_pass : run(gray), &confirmed);
   auto missing_tag_in_view = [&]() {
-    std::vector<cv::Point2f> board_xy, image_xy;
+    TagCorners unique;
     for (const auto& [id, list] : confirmed) {
-      if (id >= board.NumTags() || list.size() != 1)
-        continue;
-      const std::array<int, 4> ids = board.TagCornerIds(id);
-      for (size_t k = 0; k < 4; ++k) {
-        const Eigen::Vector3d& p = board.Corner(ids[k]);
-        board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
-        image_xy.emplace_back(static_cast<float>(list.front().corners[k].x()),
-                              static_cast<float>(list.front().corners[k].y()));
-      }
+      if (id < board.NumTags() && list.size() == 1)
+        unique[id] = list.front().corners;
     }
-    if (board_xy.size() < 8)
-      return true;  // too little to predict from
-    const cv::Mat H = cv::findHomography(board_xy, image_xy, 0);
-    if (H.empty())
-      return true;
-    std::vector<cv::Point2f> centres;
-    for (int id = 0; id < board.NumTags(); ++id) {
-      if (confirmed.count(id))
-        continue;
-      const Eigen::Vector3d c =
-          0.5 * (board.Corner(board.TagCornerIds(id)[0]) + board.Corner(board.TagCornerIds(id)[2]));
-      centres.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
-    }
-    if (centres.empty())
-      return false;
-    cv::perspectiveTransform(centres, centres, H);
-    // The homography ignores lens distortion: a tenth of the image of slack at the borders.
-    const float margin = 0.1f * static_cast<float>(std::min(gray.cols, gray.rows));
-    for (const cv::Point2f& c : centres) {
-      if (c.x >= -margin && c.y >= -margin && c.x < gray.cols + margin && c.y < gray.rows + margin)
-        return true;
-    }
-    return false;
+    // A tenth of the image of slack for lens distortion: a painting pass is cheap.
+    return MissingTagInView(board, unique, gray.size(), 0.1 * std::min(gray.cols, gray.rows));
   };
   auto add_thinned_seeds = [&] {
     // Seeds where bridges hide most tags: a 2 x 2 maximum filter thins every black region by a
@@ -543,10 +814,14 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   // No board fits in fewer pixels (and libapriltag's decimation needs a few to work on).
   if (gray.cols < kMinImageSide || gray.rows < kMinImageSide)
     return result;
-  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray) : DetectCheckerboard(gray);
+  // The 8-bit quantisation alone is uniform noise of 1/sqrt(12) grey levels.
+  const double noise_sigma =
+      options_.refine ? std::max(EstimateNoiseSigma(gray), 1.0 / std::sqrt(12.0)) : 0.0;
+  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray, noise_sigma)
+                                                 : DetectCheckerboard(gray, noise_sigma);
 }
 
-DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
+DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {
   // Kalibr's rejection rules and the sub-pixel refinement, applied to one pass's tags.
   const auto accept = [&](const std::vector<TagDetection>& tags, const std::set<int>& bad_border) {
     DetectionResult result;
@@ -580,20 +855,21 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
         result.rejected.push_back({tag.id, RejectReason::kNearBorder});
         continue;
       }
-      // The clean neighbourhood of a tag corner is the black border's width (and the corner
-      // square); the window stays inside it, and at least Kalibr's 5 x 5.
-      double edge = 0.0;
-      for (int k = 0; k < 4; ++k)
-        edge +=
-            (tag.corners[static_cast<size_t>(k)] - tag.corners[static_cast<size_t>((k + 1) % 4)])
-                .norm();
-      const double bit_px = edge / 4.0 / cells;
-      const int half_window =
-          std::clamp(static_cast<int>(0.8 * board_.config().black_tag_border * bit_px), 2, 12);
+      // The shortest edge sets the scale of the window and of the jump bound: a foreshortened
+      // tag's bits are narrow across it, and the next X-junction is that much closer.
+      double edge = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < 4; ++k)
+        edge = std::min(edge, (tag.corners[k] - tag.corners[(k + 1) % 4]).norm());
+      const double bit_px = edge / cells;
+      if (bit_px < options_.min_bit_px) {
+        result.rejected.push_back({tag.id, RejectReason::kTooSmall});
+        continue;
+      }
+      const int half_window = TagCornerHalfWindow(board_.config().black_tag_border, bit_px);
       // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
       // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
-      // is two bits away, so a jump up to 0.4 bit still lands on the right one.
-      const double max_jump = std::max(options_.max_refinement_jump_px, 0.4 * bit_px);
+      // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
+      const double max_jump = std::max(options_.max_refinement_jump_px, 0.8 * bit_px);
       const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
       std::array<DetectedCorner, 4> refined;
       bool ok = true;
@@ -604,12 +880,21 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
         if (!options_.refine)
           continue;
         double sigma = 0.0;
-        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma) ||
+        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma, noise_sigma) ||
             (refined[k].uv - tag.corners[k]).norm() > max_jump) {
           ok = false;
           break;
         }
         refined[k].sigma = std::max(options_.min_sigma_px, sigma);
+      }
+      // A refined corner that landed on another junction shifts the bit grid near it: the tag
+      // must still read as its code word at the refined corners.
+      if (ok && options_.refine) {
+        std::array<Eigen::Vector2d, 4> uv;
+        for (size_t k = 0; k < 4; ++k)
+          uv[k] = refined[k].uv;
+        const int distance = TagCodeDistance(gray, uv, board_, tag.id);
+        ok = distance >= 0 && distance <= 2;
       }
       if (!ok) {
         result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
@@ -618,40 +903,80 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray) const {
       ++result.tags_accepted;
       result.corners.insert(result.corners.end(), refined.begin(), refined.end());
     }
-    if (result.tags_accepted < options_.min_tags) {
-      if (result.tags_accepted > 0)
-        result.rejected.push_back({-1, RejectReason::kTooFewTags});
-      result.corners.clear();
+    if (options_.refine) {
+      std::set<int> decided;
+      for (const TagRejection& r : result.rejected) {
+        if (r.reason != RejectReason::kRefinementJump && r.reason != RejectReason::kTooSmall)
+          decided.insert(r.tag_id);
+      }
+      CompleteGrid(gray, noise_sigma, board_, options_, decided, &result);
     }
-    std::sort(result.corners.begin(), result.corners.end(),
-              [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
-    result.board_found = !result.corners.empty();
     return result;
   };
 
+  // Cheapest first, each further step only while a tag of the board whose corners are predicted
+  // inside the image is still missing: one decimated libapriltag pass and grid completion (all
+  // that a clear view needs); then the painted and thinned passes (docs/targets.md); then the
+  // same at full resolution, which finds small or sharply printed tags that decimation loses.
+  const auto tag_missing = [&](const DetectionResult& r) {
+    return r.tags_accepted < board_.NumTags() &&
+           MissingTagInView(board_, TagsOfCorners(board_, r.corners), gray.size(),
+                            -options_.min_border_distance_px);
+  };
   std::unique_ptr<TagContext> context = AcquireTagContext();
   std::set<int> bad_border;
-  DetectionResult result =
-      accept(DetectGridTags(context->detector, gray, board_, &bad_border), bad_border);
-  // Decimated quad search is fastest and most robust on real photos, but can lose small or
-  // sharply printed tags, or fit their corners too coarsely for the refinement; when some of the
-  // board's tags were not accepted, one pass at full resolution gets the chance to find them, and
-  // the pass that accepted more tags is kept.
-  if (context->detector->quad_decimate > 1.0f && result.tags_accepted < board_.NumTags()) {
+  const std::vector<TagDetection> first =
+      RunCheckingBorder(context->detector, gray, gray, board_, &bad_border);
+  DetectionResult result = accept(first, bad_border);
+  // The pass that accepted more tags is kept; an id that any pass decoded twice is dropped (which
+  // copy is the board's is unknown, also when one pass saw only one of them).
+  const auto keep_better = [&](DetectionResult other) {
+    std::set<int> duplicates;
+    for (const TagRejection& r : other.rejected) {
+      if (r.reason == RejectReason::kDuplicateId)
+        duplicates.insert(r.tag_id);
+    }
+    if (other.tags_accepted > result.tags_accepted)
+      result = std::move(other);
+    for (int id : duplicates) {
+      const std::array<int, 4> ids = board_.TagCornerIds(id);
+      const auto end = std::remove_if(result.corners.begin(), result.corners.end(),
+                                      [&ids](const DetectedCorner& c) {
+                                        return std::find(ids.begin(), ids.end(), c.id) != ids.end();
+                                      });
+      if (end == result.corners.end())
+        continue;
+      result.corners.erase(end, result.corners.end());
+      --result.tags_accepted;
+      result.rejected.push_back({id, RejectReason::kDuplicateId});
+    }
+  };
+  if (tag_missing(result))
+    keep_better(
+        accept(DetectGridTags(context->detector, gray, board_, &bad_border, &first), bad_border));
+  if (context->detector->quad_decimate > 1.0f && tag_missing(result)) {
     const float decimated = context->detector->quad_decimate;
     context->detector->quad_decimate = 1.0f;
     std::set<int> bad_border_full;
     DetectionResult full =
-        accept(DetectGridTags(context->detector, gray, board_, &bad_border_full), bad_border_full);
+        accept(DetectGridTags(context->detector, gray, board_, &bad_border_full, nullptr),
+               bad_border_full);
     context->detector->quad_decimate = decimated;
-    if (full.tags_accepted > result.tags_accepted)
-      result = std::move(full);
+    keep_better(std::move(full));
   }
   ReleaseTagContext(std::move(context));
+  if (result.tags_accepted < options_.min_tags) {
+    if (result.tags_accepted > 0)
+      result.rejected.push_back({-1, RejectReason::kTooFewTags});
+    result.corners.clear();
+  }
+  std::sort(result.corners.begin(), result.corners.end(),
+            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
+  result.board_found = !result.corners.empty();
   return result;
 }
 
-DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
+DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const {
   DetectionResult result;
   const int rows = board_.rows();
   const int cols = board_.cols();
@@ -710,7 +1035,8 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray) const {
     if (options_.refine) {
       Eigen::Vector2d uv = corner.uv;
       double sigma = 0.0;
-      if (RefineCorner(gray, half_window, &uv, &sigma) && (uv - corner.uv).norm() <= max_jump) {
+      if (RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) &&
+          (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
         corner.sigma = std::max(options_.min_sigma_px, sigma);
       } else {

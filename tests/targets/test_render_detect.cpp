@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <opencv2/imgproc.hpp>
 
 #include "ctcal/targets/detector.h"
 #include "ctcal/targets/renderer.h"
@@ -85,6 +87,28 @@ struct EquidistantCamera : Camera {
     const Eigen::Vector2d dir =
         theta_d > 1e-12 ? Eigen::Vector2d(m / theta_d) : Eigen::Vector2d(0, 0);
     *ray = Eigen::Vector3d(std::sin(theta) * dir.x(), std::sin(theta) * dir.y(), std::cos(theta));
+    return true;
+  }
+};
+
+// Double sphere (Usenko et al. 2018), a ~195 degree lens on 512x512 (basalt's TUM-VI-like values).
+struct DoubleSphereCamera : Camera {
+  double xi = -0.2, alpha = 0.6, fu = 158.0, fv = 158.0, cu = 255.5, cv = 255.5;
+  Eigen::Vector2d Project(const Eigen::Vector3d& p) const override {
+    const double d1 = p.norm();
+    const double zeta = xi * d1 + p.z();
+    const double d2 = std::sqrt(p.x() * p.x() + p.y() * p.y() + zeta * zeta);
+    const double den = alpha * d2 + (1.0 - alpha) * zeta;
+    return Eigen::Vector2d(fu * p.x() / den + cu, fv * p.y() / den + cv);
+  }
+  bool Unproject(const Eigen::Vector2d& uv, Eigen::Vector3d* ray) const override {
+    const double mx = (uv.x() - cu) / fu, my = (uv.y() - cv) / fv, r2 = mx * mx + my * my;
+    if (alpha > 0.5 && r2 > 1.0 / (2.0 * alpha - 1.0))
+      return false;
+    const double mz = (1.0 - alpha * alpha * r2) /
+                      (alpha * std::sqrt(1.0 - (2.0 * alpha - 1.0) * r2) + 1.0 - alpha);
+    const double k = (mz * xi + std::sqrt(mz * mz + (1.0 - xi * xi) * r2)) / (mz * mz + r2);
+    *ray = Eigen::Vector3d(k * mx, k * my, k * mz - xi);
     return true;
   }
 };
@@ -201,6 +225,8 @@ TEST(RenderDetect, OneBitBorderBoard) {
   wrong.black_tag_border = 2;
   const DetectionResult other = Detector(Board(wrong)).Detect(image);
   EXPECT_FALSE(other.board_found) << other.tags_accepted << " tags accepted";
+  for (const TagRejection& r : other.rejected)
+    EXPECT_EQ(r.reason, RejectReason::kBadBorder) << "tag " << r.tag_id;
 }
 
 TEST(RenderDetect, CheckerboardIdsSurviveAHalfTurn) {
@@ -265,6 +291,310 @@ TEST(RenderDetect, RenderingIsDeterministicPerSeed) {
   const cv::Mat c = renderer.Render(T_W_C, 43);
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
   EXPECT_GT(cv::norm(a, c, cv::NORM_INF), 0.0);
+}
+
+// A distortion-free pinhole camera 752x480 (f = 600 px), for tests that place tags by pixels.
+struct PinholeCamera : Camera {
+  double f = 600.0, cu = 375.5, cv = 239.5;
+  Eigen::Vector2d Project(const Eigen::Vector3d& p) const override {
+    return Eigen::Vector2d(f * p.x() / p.z() + cu, f * p.y() / p.z() + cv);
+  }
+  bool Unproject(const Eigen::Vector2d& uv, Eigen::Vector3d* ray) const override {
+    *ray = Eigen::Vector3d((uv.x() - cu) / f, (uv.y() - cv) / f, 1.0);
+    return true;
+  }
+};
+
+// Looking straight down at the board (z_C = -z_W) from height `z`, the board's (x, y) at the
+// image centre; the image's u grows with x_W and v with -y_W.
+Eigen::Isometry3d Overhead(double x, double y, double z) {
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  T_W_C.translation() = Eigen::Vector3d(x, y, z);
+  return T_W_C;
+}
+
+bool HasRejection(const DetectionResult& result, int tag_id, RejectReason reason) {
+  for (const TagRejection& r : result.rejected) {
+    if (r.tag_id == tag_id && r.reason == reason)
+      return true;
+  }
+  return false;
+}
+
+bool HasTag(const Board& board, const DetectionResult& result, int tag_id) {
+  const int first = board.TagCornerIds(tag_id)[0];
+  for (const DetectedCorner& c : result.corners) {
+    if (c.id == first)
+      return true;
+  }
+  return false;
+}
+
+// libapriltag's own corners (no refinement) of a distortion-free view: their mean error is well
+// below the half pixel that a missed convention shift would add to every corner.
+TEST(RenderDetect, RawTagCornersFollowThePixelConvention) {
+  const PinholeCamera camera;
+  const Board board(Grid6x6());
+  const BoardRenderer renderer(board, 752, 480, Unprojection(camera));
+  const Eigen::Isometry3d T_W_C = Overhead(0.33, 0.33, 1.0);
+  // One libapriltag pass: the tags bridged to their corner squares are missing, the rest count.
+  const std::vector<TagDetection> tags = DetectTags36h11(renderer.Render(T_W_C, 2), 2);
+  ASSERT_GE(tags.size(), 10u);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const TagDetection& tag : tags) {
+    const std::array<int, 4> ids = board.TagCornerIds(tag.id);
+    for (size_t k = 0; k < 4; ++k)
+      mean += (tag.corners[k] - camera.Project(T_W_C.inverse() * board.Corner(ids[k]))) /
+              (4.0 * static_cast<double>(tags.size()));
+  }
+  std::printf("raw libapriltag corners: mean error (%.3f, %.3f) px\n", mean.x(), mean.y());
+  EXPECT_LT(mean.norm(), 0.15);
+}
+
+// 16-bit (TUM-VI stores 12-bit data in 16 bits) and colour inputs give the 8-bit image's corners.
+TEST(RenderDetect, SixteenBitAndColourImagesGiveTheSameCorners) {
+  const RadtanCamera camera;
+  const Board board(Grid6x6());
+  const BoardRenderer renderer(board, 752, 480, Unprojection(camera));
+  const cv::Mat gray = renderer.Render(LookAt({0.35, 0.30, 0.85}, {0.33, 0.33, 0.0}, 0.1), 4);
+  const Detector detector(board);
+  const DetectionResult reference = detector.Detect(gray);
+  ASSERT_GE(reference.corners.size(), 100u);
+  cv::Mat colour, colour_alpha, wide;
+  cv::cvtColor(gray, colour, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(gray, colour_alpha, cv::COLOR_GRAY2BGRA);
+  // 12-bit data in a 16-bit container, spanning the 8-bit image's range: the stretch restores it.
+  double lo = 0.0, hi = 0.0;
+  cv::minMaxLoc(gray, &lo, &hi);
+  gray.convertTo(wide, CV_16U, 4095.0 / (hi - lo), -lo * 4095.0 / (hi - lo));
+  for (const auto& [name, image] : std::vector<std::pair<std::string, cv::Mat>>{
+           {"BGR", colour}, {"BGRA", colour_alpha}, {"16-bit", wide}}) {
+    const DetectionResult result = detector.Detect(image);
+    ASSERT_EQ(result.corners.size(), reference.corners.size()) << name;
+    double worst = 0.0;
+    for (size_t i = 0; i < result.corners.size(); ++i) {
+      EXPECT_EQ(result.corners[i].id, reference.corners[i].id) << name;
+      worst = std::max(worst, (result.corners[i].uv - reference.corners[i].uv).norm());
+    }
+    // Colour converts back to the same grey levels; the 16-bit stretch rescales the contrast,
+    // which moves a refined corner by far less than its noise.
+    EXPECT_LT(worst, name == "16-bit" ? 0.05 : 1e-12) << name;
+  }
+}
+
+// Kalibr's rule: a view with fewer than min_tags tags is no observation.
+TEST(RenderDetect, TooFewTagsIsNoObservation) {
+  const PinholeCamera camera;
+  TargetConfig config = Grid6x6();
+  config.tag_rows = 1;
+  config.tag_cols = 3;
+  const Board board(config);
+  const cv::Mat image =
+      BoardRenderer(board, 752, 480, Unprojection(camera)).Render(Overhead(0.15, 0.04, 0.6), 6);
+  const DetectionResult result = Detector(board).Detect(image);
+  EXPECT_FALSE(result.board_found);
+  EXPECT_TRUE(result.corners.empty());
+  EXPECT_EQ(result.tags_accepted, 3);
+  EXPECT_TRUE(HasRejection(result, -1, RejectReason::kTooFewTags));
+  DetectorOptions three;
+  three.min_tags = 3;
+  EXPECT_EQ(Detector(board, three).Detect(image).corners.size(), 12u);
+}
+
+// Kalibr's rule: a tag with a corner closer than 4 px to the image border is dropped, the rest
+// of the view stays.
+TEST(RenderDetect, TagsAtTheImageBorderAreRejected) {
+  const PinholeCamera camera;
+  const Board board(Grid6x6());
+  const BoardRenderer renderer(board, 752, 480, Unprojection(camera));
+  // From 0.9 m a tag is 59 px; tag column 0's left corners (x = 0) land at u = 2.5 and 6.5 px.
+  for (const double u_left : {2.5, 6.5}) {
+    const double x = (camera.cu - u_left) / camera.f * 0.9;
+    const Eigen::Isometry3d T_W_C = Overhead(x, 0.33, 0.9);
+    const DetectionResult result = Detector(board).Detect(renderer.Render(T_W_C, 8));
+    ASSERT_TRUE(result.board_found) << u_left;
+    for (const DetectedCorner& c : result.corners) {
+      EXPECT_GE(c.uv.x(), 4.0);
+      EXPECT_GE(c.uv.y(), 4.0);
+    }
+    for (int row = 0; row < 6; ++row) {
+      const int tag = 6 * row;
+      const Eigen::Vector2d uv =
+          camera.Project(T_W_C.inverse() * board.Corner(board.TagCornerIds(tag)[0]));
+      if (uv.y() < 4.0 || uv.y() > 475.0)
+        continue;  // cut by the top or bottom border as well
+      if (u_left < 4.0) {
+        EXPECT_FALSE(HasTag(board, result, tag)) << tag;
+        EXPECT_TRUE(HasRejection(result, tag, RejectReason::kNearBorder)) << tag;
+      } else {
+        EXPECT_TRUE(HasTag(board, result, tag)) << tag;
+      }
+    }
+  }
+}
+
+// Kalibr's rule: an id decoded twice is dropped, both copies (which one is the board's?). Tag 7's
+// image is pasted over tag 8 in a fronto-parallel view, where neighbours differ by a shift.
+TEST(RenderDetect, DuplicateIdsAreRejected) {
+  const PinholeCamera camera;
+  const Board board(Grid6x6());
+  const Eigen::Isometry3d T_W_C = Overhead(0.33, 0.33, 1.0);
+  cv::Mat image = BoardRenderer(board, 752, 480, Unprojection(camera)).Render(T_W_C, 9);
+  auto pixel = [&](int corner_id) {
+    return camera.Project(T_W_C.inverse() * board.Corner(corner_id));
+  };
+  // Tag 7's square plus half a gap all round (the corner squares are identical everywhere).
+  const Eigen::Vector2d a = pixel(board.TagCornerIds(7)[3]), b = pixel(board.TagCornerIds(7)[1]);
+  const double pad = 0.5 * 0.3 * (b.x() - a.x());
+  const cv::Rect from(static_cast<int>(std::lround(a.x() - pad)),
+                      static_cast<int>(std::lround(a.y() - pad)),
+                      static_cast<int>(std::lround(b.x() - a.x() + 2 * pad)),
+                      static_cast<int>(std::lround(b.y() - a.y() + 2 * pad)));
+  const Eigen::Vector2d shift = pixel(board.TagCornerIds(8)[0]) - pixel(board.TagCornerIds(7)[0]);
+  cv::Rect to = from;
+  to.x += static_cast<int>(std::lround(shift.x()));
+  to.y += static_cast<int>(std::lround(shift.y()));
+  image(from).copyTo(image(to));
+  const DetectionResult result = Detector(board).Detect(image);
+  ASSERT_TRUE(result.board_found);
+  EXPECT_TRUE(HasRejection(result, 7, RejectReason::kDuplicateId));
+  EXPECT_FALSE(HasTag(board, result, 7));
+  EXPECT_FALSE(
+      HasTag(board, result, 8));  // its place shows tag 7's code: completion must not take it
+  EXPECT_EQ(result.tags_accepted, 34);
+}
+
+// Kalibr's rule: a corner the refinement moves too far is dropped with its tag. The image around
+// tag 14's top-left corner is shifted by 5 px along both axes, so the X-junction there is 7 px
+// from where the tag's edges and its neighbours put it.
+TEST(RenderDetect, RefinementJumpsAreRejected) {
+  const PinholeCamera camera;
+  const Board board(Grid6x6());
+  const Eigen::Isometry3d T_W_C = Overhead(0.33, 0.33, 1.0);
+  cv::Mat image = BoardRenderer(board, 752, 480, Unprojection(camera)).Render(T_W_C, 10);
+  const int corner = board.TagCornerIds(14)[3];
+  const Eigen::Vector2d uv = camera.Project(T_W_C.inverse() * board.Corner(corner));
+  const int cx = static_cast<int>(std::lround(uv.x())), cy = static_cast<int>(std::lround(uv.y()));
+  const cv::Mat patch = image(cv::Rect(cx - 9, cy - 9, 14, 14)).clone();
+  patch.copyTo(image(cv::Rect(cx - 4, cy - 4, 14, 14)));
+  const DetectionResult result = Detector(board).Detect(image);
+  ASSERT_TRUE(result.board_found);
+  EXPECT_FALSE(HasTag(board, result, 14));
+  EXPECT_TRUE(HasRejection(result, 14, RejectReason::kRefinementJump));
+  EXPECT_EQ(result.tags_accepted, 35);
+}
+
+// Immerkaer's robust noise estimate on rendered views (edges everywhere) with known noise.
+TEST(RenderDetect, NoiseEstimateRecoversTheRenderedNoise) {
+  const RadtanCamera camera;
+  const Board board(Grid6x6());
+  for (const double noise : {1.5, 3.0, 6.0}) {
+    RenderOptions options;
+    options.noise_sigma = noise;
+    const cv::Mat image = BoardRenderer(board, 752, 480, Unprojection(camera), options)
+                              .Render(LookAt({0.35, 0.30, 0.85}, {0.33, 0.33, 0.0}, 0.1), 12);
+    const double estimate = EstimateNoiseSigma(image);
+    std::printf("rendered noise %.1f grey levels: estimate %.2f\n", noise, estimate);
+    // 8-bit rounding adds 1/sqrt(12) in quadrature; the median's quantisation a little more.
+    const double expected = std::sqrt(noise * noise + 1.0 / 12.0);
+    EXPECT_NEAR(estimate, expected, 0.15 * expected) << noise;
+  }
+}
+
+// The reported sigma against the scatter of the same corner over independent noise: the
+// sandwich estimate must neither claim much more nor much less than the noise delivers.
+TEST(RenderDetect, SigmaMatchesTheScatterOverNoise) {
+  const RadtanCamera camera;
+  const Board board(Grid6x6());
+  RenderOptions options;
+  options.noise_sigma = 3.0;
+  const BoardRenderer renderer(board, 752, 480, Unprojection(camera), options);
+  DetectorOptions no_floor;
+  no_floor.min_sigma_px = 0.0;
+  const Detector detector(board, no_floor);
+  const Eigen::Isometry3d T_W_C = LookAt({0.35, 0.30, 0.85}, {0.33, 0.33, 0.0}, 0.1);
+  const int runs = 16;
+  std::map<int, std::vector<Eigen::Vector2d>> uv_of;
+  std::map<int, double> sigma_sum;
+  for (int seed = 0; seed < runs; ++seed) {
+    for (const DetectedCorner& c : detector.Detect(renderer.Render(T_W_C, 100 + seed)).corners) {
+      uv_of[c.id].push_back(c.uv);
+      sigma_sum[c.id] += c.sigma;
+    }
+  }
+  double scatter2 = 0.0, sigma2 = 0.0;
+  int n = 0;
+  for (const auto& [id, list] : uv_of) {
+    if (static_cast<int>(list.size()) != runs)
+      continue;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& uv : list)
+      mean += uv / runs;
+    for (const Eigen::Vector2d& uv : list)
+      scatter2 += 0.5 * (uv - mean).squaredNorm() / (runs - 1);  // per coordinate
+    const double sigma = sigma_sum[id] / runs;
+    sigma2 += sigma * sigma;
+    ++n;
+  }
+  ASSERT_GT(n, 100);
+  const double scatter = std::sqrt(scatter2 / n), sigma = std::sqrt(sigma2 / n);
+  std::printf("noise 3 grey levels: corner scatter %.4f px, reported sigma %.4f px (ratio %.2f)\n",
+              scatter, sigma, sigma / scatter);
+  EXPECT_GT(sigma / scatter, 0.7);
+  EXPECT_LT(sigma / scatter, 1.4);
+}
+
+// Strong fisheye views (double sphere, ~195 degrees): the board close to the lens and far off
+// its axis, where tags bend visibly. Tags wholly in the image (6 px in) with 2 px per bit or more
+// are counted as readable; the detected corners must sit at the true projections.
+void CheckDoubleSphereView(const Eigen::Vector3d& p_W, const Eigen::Vector3d& target_W,
+                           uint64_t seed) {
+  const DoubleSphereCamera camera;
+  const Board board(Grid6x6());
+  const BoardRenderer renderer(board, 512, 512, Unprojection(camera));
+  const Eigen::Isometry3d T_W_C = LookAt(p_W, target_W, 0.3);
+  const Eigen::Isometry3d T_C_W = T_W_C.inverse();
+  int in_view = 0;
+  for (int tag = 0; tag < board.NumTags(); ++tag) {
+    bool inside = true;
+    std::vector<Eigen::Vector2d> uvs;
+    for (int id : board.TagCornerIds(tag)) {
+      const Eigen::Vector3d p_C = T_C_W * board.Corner(id);
+      uvs.push_back(camera.Project(p_C));
+      Eigen::Vector3d ray;
+      inside &= p_C.z() > -0.5 * p_C.norm() && uvs.back().x() > 6 && uvs.back().y() > 6 &&
+                uvs.back().x() < 505 && uvs.back().y() < 505 && camera.Unproject(uvs.back(), &ray);
+    }
+    // Readable: every edge at least 2 px per bit.
+    for (size_t k = 0; k < 4; ++k)
+      inside &= (uvs[k] - uvs[(k + 1) % 4]).norm() >= 2.0 * 10;
+    in_view += inside ? 1 : 0;
+  }
+  const DetectionResult result = Detector(board).Detect(renderer.Render(T_W_C, seed));
+  const Errors e = Compare(board, camera, T_W_C, result);
+  std::printf(
+      "double sphere view from (%.2f, %.2f, %.2f): %d readable tags, libapriltag %d, "
+      "accepted %d, RMS %.3f px, max %.3f px\n",
+      p_W.x(), p_W.y(), p_W.z(), in_view, result.tags_detected, result.tags_accepted, e.rms, e.max);
+  EXPECT_GE(in_view, 15);
+  // Not every tag yet: near the rim of the image circle tags bend within themselves and some
+  // corners leave the refinement's reach (docs/targets.md); this floor catches regressions.
+  EXPECT_GE(result.tags_accepted, 0.85 * in_view);
+  EXPECT_LE(e.rms, 0.15);
+  EXPECT_LT(e.max, 0.5);
+}
+
+TEST(RenderDetect, DoubleSphereWideAngleViews) {
+  CheckDoubleSphereView({0.33, 0.33, 0.30}, {0.33, 0.33, 0.0}, 20);   // board fills the circle
+  CheckDoubleSphereView({-0.10, 0.33, 0.22}, {0.9, 0.33, -0.1}, 22);  // grazing, near the rim
+}
+
+// Known defect (docs/targets.md): looking along the board from its corner, the far tags are
+// foreshortened to ~2 px per bit across and curved; one accepted corner (id 89) is 2.8 px off
+// and the RMS is 0.39 px. Disabled until the refinement handles such tags.
+TEST(RenderDetect, DISABLED_DoubleSphereFarForeshortenedTags) {
+  CheckDoubleSphereView({0.05, 0.05, 0.25}, {0.6, 0.7, -0.1}, 21);
 }
 
 }  // namespace

@@ -77,6 +77,12 @@ struct SplineCalibrationResult {
   double covariance_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<std::string> warnings;
+  // Tangent-space covariance of the estimated quantities, priors included (the left perturbation
+  // for rotations, gravity as its 2-dof sphere tangent gravity_W.direction[i]), and the sigma of
+  // the data alone (.inf where undetermined), per `covariance_names`; empty without covariance.
+  std::vector<std::string> covariance_names;
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd data_sigma;
 };
 
 // Receives every progress line (stages, iterations with their cost, warnings).

@@ -11,8 +11,10 @@
 // byte-identical files.
 #pragma once
 
+#include <map>
 #include <string>
 
+#include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 #include "ctcal/sim/simulator.h"
 
@@ -28,5 +30,9 @@ struct WriteOptions {
 // Throws std::runtime_error naming the path that could not be created or written.
 void WriteDataset(const SimulatedDataset& data, const RigConfig& guess, const std::string& dir,
                   const WriteOptions& options = {});
+
+// What LoadDataset reads back from WriteDataset's files (noisy corners with their sigma), without
+// the files: for in-process simulate + calibrate loops (`ctcal montecarlo`, tests).
+std::map<std::string, SensorData> ToSensorData(const SimulatedDataset& data);
 
 }  // namespace ctcal::sim

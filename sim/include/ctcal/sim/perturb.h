@@ -16,6 +16,7 @@
 // are removed: the output is an input rig file.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "ctcal/sensors/rig.h"
@@ -24,6 +25,10 @@
 namespace ctcal::sim {
 
 enum class Perturbation { kTable4, kCoarse };
+
+// The perturbation of seed N draws from Random(N).Fork(kPerturbationStream), independent of the
+// measurements' stream (`ctcal simulate`, `ctcal montecarlo`: the same seed, the same guesses).
+inline constexpr std::uint64_t kPerturbationStream = 0x9e7;
 
 // "table4" or "coarse"; throws std::invalid_argument naming the word.
 Perturbation ParsePerturbation(const std::string& name);

@@ -31,8 +31,14 @@ struct DetectorOptions {
   // A view with fewer accepted tags is no observation (Kalibr: minTagsForValidObs = 4).
   int min_tags = 4;
   // A corner the sub-pixel refinement moves farther than this is dropped with its whole tag
-  // (Kalibr: maxSubpixDisplacement2 = 1.5 px^2, i.e. 1.22 px).
+  // (Kalibr: maxSubpixDisplacement2 = 1.5 px^2, i.e. 1.22 px), or 0.8 bit of the tag's shortest
+  // edge if larger (distorted and foreshortened tags, docs/targets.md).
   double max_refinement_jump_px = 1.22;
+  // A tag narrower than this per bit along its shortest edge is dropped: the refinement window
+  // then reaches the next X-junction (rendered double-sphere views: corners of tags at 1.2-1.5
+  // px per bit were off by ~1 px). Set between that and the simulator's 512x512 fisheye, whose
+  // tags at ~1.7 px per bit have corners within 0.17 px (95 %); tests/sim/test_images.cpp.
+  double min_bit_px = 1.6;
   // Sub-pixel refinement on/off, and the floor of the reported sigma (px): a noise-free image
   // gives a near-zero residual, which would claim more than the model of the corner can deliver.
   bool refine = true;
@@ -52,8 +58,10 @@ enum class RejectReason {
   kNearBorder,      // a tag corner within min_border_distance_px of the image border
   kDuplicateId,     // the same tag id decoded twice (both dropped: which one is the board's?)
   kUnknownId,       // a tag id the board does not have (another board in view, wrong file?)
-  kRefinementJump,  // sub-pixel refinement moved a corner too far / did not converge
+  kRefinementJump,  // refinement moved a corner too far / did not converge / the tag no
+                    // longer reads as its code word at the refined corners
   kBadBorder,       // decoded, but its black border is not blackTagBorder bits wide
+  kTooSmall,        // fewer than min_bit_px pixels per bit: too small to refine its corners
   kTooFewTags,      // the whole view: fewer than min_tags tags left
 };
 const char* ToString(RejectReason reason);
@@ -96,8 +104,9 @@ class Detector {
   struct TagContext;
   std::unique_ptr<TagContext> AcquireTagContext() const;
   void ReleaseTagContext(std::unique_ptr<TagContext> context) const;
-  DetectionResult DetectAprilGrid(const cv::Mat& gray) const;
-  DetectionResult DetectCheckerboard(const cv::Mat& gray) const;
+  // noise_sigma: the image's noise (grey levels), for the corners' sigma.
+  DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
+  DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
 
   Board board_;
   DetectorOptions options_;
@@ -125,9 +134,14 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 
 // Refines an X-junction or a corner near `uv` by the gradient-orthogonality condition (every
 // image gradient in a window is orthogonal to the vector from the corner to its pixel), weighted
-// by a Gaussian. Returns false if it does not converge. `sigma_px` (optional) is the estimate's
-// standard deviation from the fit's residuals: s^2 * (sum g g^T)^-1, s^2 the residual variance.
+// by a Gaussian; the window shrinks near the image border. Returns false if it does not converge.
+// `sigma_px` (optional): the estimate's standard deviation per coordinate caused by white image
+// noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv,
-                  double* sigma_px = nullptr);
+                  double* sigma_px = nullptr, double noise_sigma = 1.0);
+
+// The standard deviation of an 8-bit image's white noise (grey levels), robust to edges
+// (Immerkaer's mask with a median).
+double EstimateNoiseSigma(const cv::Mat& gray);
 
 }  // namespace ctcal

@@ -1,0 +1,162 @@
+// `ctcal montecarlo` end to end with two very short runs (the real study is in
+// docs/consistency.md): the files it writes, the NEES bands recomputed from Boost.Math, and bad
+// usage as one line with exit code 2.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <boost/math/distributions/chi_squared.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+
+namespace ctcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+std::string TempDir(const std::string& what) {
+  return ::testing::TempDir() + "/ctcal_montecarlo_" + std::to_string(getpid()) + "_" + what;
+}
+
+Result RunCtcal(const std::string& args, const std::string& dir) {
+  fs::create_directories(dir);
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  const std::string cmd = std::string(CTCAL_BINARY) + " " + args + " >" + out + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(out);
+  r.err = Slurp(err);
+  return r;
+}
+
+int Lines(const std::string& s) {
+  int n = 0;
+  for (char c : s)
+    n += c == '\n';
+  return n;
+}
+
+class MonteCarlo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::is_regular_file(CTCAL_BINARY))
+      GTEST_SKIP() << CTCAL_BINARY << " is not built";
+  }
+};
+
+TEST_F(MonteCarlo, TwoShortRunsWriteRunsSummaryAndPlots) {
+  const std::string dir = TempDir("full");
+  const Result r = RunCtcal(
+      "montecarlo --scenario full --runs 2 --duration 3 --seed0 5 --threads 2 --out " + dir, dir);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("[  2/2]"), std::string::npos) << r.out;  // progress per run
+
+  // runs.csv: one row per run and estimated scalar, both seeds.
+  std::ifstream csv(dir + "/runs.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "#run,seed,parameter,truth,estimate,error,sigma");
+  std::set<std::string> seeds;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::stringstream ss(line);
+    std::string run, seed;
+    std::getline(ss, run, ',');
+    std::getline(ss, seed, ',');
+    seeds.insert(seed);
+  }
+  EXPECT_EQ(seeds, (std::set<std::string>{"5", "6"}));
+  // The default rig estimates 98 scalars (test_spline_calibrator.cpp counts them).
+  EXPECT_EQ(rows, 2 * 98);
+
+  const YAML::Node s = YAML::LoadFile(dir + "/summary.yaml");
+  EXPECT_EQ(s["scenario"].as<std::string>(), "full");
+  EXPECT_EQ(s["succeeded"].as<int>(), 2);
+  EXPECT_EQ(s["parameters"].size(), 98u);
+  const YAML::Node p = s["parameters"]["cam0.intrinsics[0]"];
+  ASSERT_TRUE(p.IsMap());
+  EXPECT_GE(p["rms_error"].as<double>(), std::abs(p["mean_error"].as<double>()));
+  EXPECT_GT(p["mean_sigma"].as<double>(), 0.0);
+  EXPECT_LT(p["mean_sigma"].as<double>(), 5.0);  // px: a 3 s recording still pins the focal
+
+  // One NEES group per sensor and gravity, each band the chi-square quantiles of
+  // runs x dimension degrees of freedom over the runs.
+  const YAML::Node groups = s["nees"]["groups"];
+  std::set<std::string> names;
+  for (const auto& g : groups)
+    names.insert(g.first.as<std::string>());
+  EXPECT_EQ(names, (std::set<std::string>{"cam0", "cam1", "gravity_W", "gyro0", "imu0", "imu1"}));
+  const auto check_band = [](const YAML::Node& g, double confidence) {
+    const int dim = g["dimension"].as<int>();
+    ASSERT_GT(dim, 0);
+    EXPECT_DOUBLE_EQ(g["confidence"].as<double>(), confidence);
+    // dof: the dimensions summed over the runs (a scalar undetermined in one run drops out).
+    const int dof = g["dof"].as<int>();
+    EXPECT_GE(dof, dim);
+    const boost::math::chi_squared chi2(dof);
+    const double a = 0.5 * (1.0 - confidence);
+    EXPECT_NEAR(g["band"][0].as<double>(), boost::math::quantile(chi2, a) / 2, 1e-4 * dim);
+    EXPECT_NEAR(g["band"][1].as<double>(), boost::math::quantile(chi2, 1 - a) / 2, 1e-4 * dim);
+    const double mean = g["mean_nees"].as<double>();
+    EXPECT_GE(mean, 0.0);
+    EXPECT_EQ(g["inside"].as<bool>(),
+              mean >= g["band"][0].as<double>() && mean <= g["band"][1].as<double>());
+  };
+  for (const auto& g : groups)
+    check_band(g.second, 0.995);
+  check_band(s["nees"]["pooled"]["overall"], 0.95);
+  // The joint NEES of 95 scalars cannot be small unless the errors are tiny against sigma; a
+  // broken covariance (e.g. sigmas 1000x too large or small) lands orders of magnitude away.
+  const double per_dim = s["nees"]["pooled"]["overall"]["mean_nees_per_dimension"].as<double>();
+  EXPECT_GT(per_dim, 0.3);
+  EXPECT_LT(per_dim, 3.0);
+
+  for (const char* plot : {"imu0.Dw", "imu1.R_B_S", "cam0.intrinsics", "gyro0.time_offset"})
+    EXPECT_GT(fs::file_size(dir + "/plots/" + plot + ".png"), 1000u) << plot;
+  EXPECT_TRUE(fs::exists(dir + "/logs/seed_5.txt"));
+}
+
+TEST_F(MonteCarlo, BadUsageIsOneLineAndExitTwo) {
+  const std::string dir = TempDir("bad");
+  for (const std::string& args :
+       {std::string("--scenario full --runs 0 --out ") + dir,
+        std::string("--scenario sideways --runs 2 --out ") + dir,
+        std::string("--scenario full --runs 2 --method both --out ") + dir,
+        std::string("--scenario full --runs 2 --aux-velocity state --out ") + dir,
+        std::string("--scenario full --runs 2 --method discrete --aux-velocity fast --out ") + dir,
+        std::string("--scenario full --runs 2 --duration 0.5 --out ") + dir,
+        std::string("--scenario full --runs 2 --seed0 -3 --out ") + dir}) {
+    const Result r = RunCtcal("montecarlo " + args, dir);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("ctcal montecarlo: error: ", 0), 0u) << r.err;
+  }
+  // The discrete method's dispatch point says it is not there yet, before any work.
+  const Result d =
+      RunCtcal("montecarlo --scenario full --runs 2 --method discrete --out " + dir, dir);
+  EXPECT_EQ(d.code, 2);
+  EXPECT_NE(d.err.find("not available"), std::string::npos) << d.err;
+}
+
+}  // namespace
+}  // namespace ctcal
