@@ -1,8 +1,9 @@
 // `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both]
 // [--threads N]` (SPEC section 8): loads the rig and the dataset, runs the continuous-time
 // calibrator (calibrator/spline_calibrator.h), the discrete one (discrete_calibrator.h) or both
-// with a cross-check, and writes OUT/result.yaml, the Kalibr files and OUT/log.txt (`both`:
-// OUT/spline/, OUT/discrete/, OUT/crosscheck.yaml).
+// with a cross-check, and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and the report
+// (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h; spline method only).
+// `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml.
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "calibrate_report.h"
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
@@ -28,7 +30,8 @@ namespace {
 // trajectory spline, and Kalibr's camchain.yaml beside the result.
 int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
                   const std::map<std::string, SensorData>& data, const std::string& out_dir,
-                  const CalibrationLog& log, std::ofstream& log_file) {
+                  const CalibrationLog& log, std::ofstream& log_file,
+                  const report::RunInfo& run_info) {
   CameraOnlyResult result;
   std::ostringstream stages;
   try {
@@ -47,6 +50,7 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   }
   log(FormatParameterTable(result.rig));
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
   return kExitOk;
 }
 
@@ -120,7 +124,7 @@ int RunCalibrate(int argc, char** argv) {
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma.");
-  std::string rig_path, data_dir, out_dir, method, representation, aux_velocity;
+  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
@@ -141,9 +145,12 @@ int RunCalibrate(int argc, char** argv) {
       "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
       "trajectory knot spacing in s (0: from the motion's bandwidth)")(
       "bias-knot-spacing", po::value(&options.bias_knot_spacing_s)->default_value(1.0),
-      "bias spline knot spacing in s")("max-iterations",
-                                       po::value(&options.max_iterations)->default_value(50),
-                                       "Levenberg-Marquardt iterations per solve");
+      "bias spline knot spacing in s")(
+      "init", po::value(&init_policy)->default_value("beyond-prior"),
+      "coarse-guess initialisation (docs/initialisation.md): beyond-prior (replace guesses "
+      "without prior_sigma, and those the data contradict), always, off")(
+      "max-iterations", po::value(&options.max_iterations)->default_value(50),
+      "Levenberg-Marquardt iterations per solve");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
@@ -165,6 +172,14 @@ int RunCalibrate(int argc, char** argv) {
     return cli.UsageError("--representation must be split or joint, got " + representation);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  if (init_policy == "beyond-prior")
+    options.coarse_init.policy = GuessPolicy::kBeyondPrior;
+  else if (init_policy == "always")
+    options.coarse_init.policy = GuessPolicy::kAlways;
+  else if (init_policy == "off")
+    options.coarse_init.policy = GuessPolicy::kOff;
+  else
+    return cli.UsageError("--init must be beyond-prior, always or off, got " + init_policy);
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -191,8 +206,22 @@ int RunCalibrate(int argc, char** argv) {
     return cli.InputError(e.what());
   }
 
+  // The configuration of the run, for the report.
+  report::RunInfo run_info = CalibrateRunInfo(argc, argv);
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"config.rig", rig_path},
+           {"config.data", data_dir},
+           {"config.out", out_dir},
+           {"config.method", method},
+           {"config.order", std::to_string(options.order)},
+           {"config.representation", representation},
+           {"config.jacobians", options.analytic ? "analytic" : "autodiff"},
+           {"config.bias_knot_spacing_s", std::to_string(options.bias_knot_spacing_s)},
+           {"config.max_iterations", std::to_string(options.max_iterations)}})
+    run_info.emplace_back(key, value);
+
   if (rig.IsCameraOnly())
-    return RunCameraOnly(cli, rig, data, out_dir, log, log_file);
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info);
   if (method != "spline") {
     discrete_options.threads = options.threads;
     discrete_options.max_iterations = options.max_iterations;
@@ -227,6 +256,9 @@ int RunCalibrate(int argc, char** argv) {
                 result.covariance_seconds, result.total_seconds);
   log(line);
   log("wrote " + out_dir + "/result.yaml, camchain-imucam.yaml, imu.yaml, log.txt");
+  run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
+  run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
   return kExitOk;
 }
 

@@ -1,25 +1,29 @@
 // `ctcal report --out OUT` (SPEC section 8): re-renders OUT/report.html and OUT/report.pdf of a
 // finished calibration folder with report/report.h (the same function calibrate calls).
 #include <cstdio>
+#include <string>
 
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/report/report.h"
+#include "ctcal_git_describe.h"  // generated at build time (cmake/GitDescribe.cmake)
 
 namespace ctcal::app {
 
 int RunReport(int argc, char** argv) {
   namespace po = boost::program_options;
-  CommandLine cli("report", "--out OUT",
+  CommandLine cli("report", "--out OUT [--png-dir DIR]",
                   "Re-render the calibration report (OUT/report.html and OUT/report.pdf) of a "
                   "folder written by ctcal calibrate.");
-  std::string out_dir;
+  std::string out_dir, png_dir;
   cli.options().add_options()("out", po::value(&out_dir)->required(),
-                              "calibration folder holding result.yaml and report_data/");
+                              "calibration folder holding result.yaml and report_data/")(
+      "png-dir", po::value(&png_dir), "also write every figure as <png-dir>/<figure id>.png");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   report::ReportOptions options;
-  options.ctcal_version = CTCAL_VERSION;
+  options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
+  options.png_dir = png_dir;
   report::ReportOutput out;
   try {
     out = report::RenderReport(out_dir, options);

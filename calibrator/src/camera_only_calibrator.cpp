@@ -18,6 +18,7 @@
 
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/calibrator/marginal_covariance.h"
+#include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -90,6 +91,8 @@ Eigen::Isometry3d GetPose(const PoseBlock& block) {
 struct CornerTerm {
   int camera = 0;
   int pose = 0;
+  std::int64_t t_ns = 0;  // image stamp and corner id: the report's rows
+  int corner_id = 0;
   Eigen::Vector3d p_W;
   Eigen::Vector2d uv;
   double sigma = 1.0;
@@ -288,6 +291,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       CornerTerm term;
       term.camera = static_cast<int>(c);
       term.pose = it->second;
+      term.t_ns = o.t_ns;
+      term.corner_id = o.corner_id;
       term.p_W = board.Corner(o.corner_id);
       term.uv = Eigen::Vector2d(o.u, o.v);
       term.sigma = o.sigma.value_or(cams[c]->config->pixel_sigma);
@@ -427,6 +432,32 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     ++cams[c]->report.corners;
   }
 
+  // The report's corner rows (report_data.h): the model at the final values, outliers included.
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    const CornerTerm& t = terms[i];
+    CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
+    const PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
+    const PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
+    double r[2];
+    const bool ok = VisitCameraModel(cam.model.type(), [&](auto model) {
+      return CornerResidual<decltype(model)>(t.p_W, t.uv, t.sigma)(
+          T_W_B.q, T_W_B.p, T_B_C.q, T_B_C.p, cam.model.params().data(), r);
+    });
+    auto& rows = result.report_data.corners[cam.config->name];
+    report::CornerResidual row;
+    row.t_ns = t.t_ns;
+    row.frame = rows.empty() ? 0 : rows.back().frame + (rows.back().t_ns != t.t_ns);
+    row.corner_id = t.corner_id;
+    row.u = t.uv.x();
+    row.v = t.uv.y();
+    // r = (predicted - measured) / sigma in this file's residual.
+    row.du = ok ? -r[0] * t.sigma : std::numeric_limits<double>::quiet_NaN();
+    row.dv = ok ? -r[1] * t.sigma : std::numeric_limits<double>::quiet_NaN();
+    row.whitened = ok ? std::hypot(r[0], r[1]) : std::numeric_limits<double>::quiet_NaN();
+    row.outlier = !t.inlier;
+    rows.push_back(row);
+  }
+
   // Marginal covariance of the calibration, board poses marginalised.
   std::vector<CalibrationBlock> calib;
   for (std::size_t c = 0; c < cams.size(); ++c) {
@@ -463,6 +494,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   if (!calib.empty()) {
     const MarginalInformation info = ComputeMarginalInformation(problem, calib);
     const CalibrationCovariance cov = InvertInformation(info);
+    result.report_data.correlation =
+        CorrelationFromCovariance(cov.covariance, info.names, cov.undetermined);
     for (std::size_t i = 0; i < info.names.size(); ++i) {
       sigma_of[info.names[i]] = cov.undetermined[i] ? std::numeric_limits<double>::infinity()
                                                     : cov.sigma(static_cast<Eigen::Index>(i));

@@ -134,7 +134,9 @@ class DiscreteProblem {
     ceres::Problem& P = *problem_;
     blocks_ = state_.Blocks();
     if (prior_center_.empty()) {
-      for (const ParameterBlockInfo& b : blocks_)
+      // On the rig file's values, not on the initialisation's (coarse_init.h), as the spline's.
+      CalibrationState guess(state_.rig());
+      for (const ParameterBlockInfo& b : guess.Blocks())
         prior_center_.emplace_back(b.values, b.values + b.ambient_size);
     }
     for (ParameterBlockInfo& b : blocks_) {
@@ -574,9 +576,11 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
       " (discrete, aux velocity " +
       (options.aux_velocity == AuxVelocityModel::kState ? "state" : "rigid") + ")");
   CalibrationState state(rig);
+  // The spline method's coarse-guess initialisation and data selection (the same start).
+  const CoarseInitResult init = InitializeFromData(&state, data, so.coarse_init, log);
   Prepared prep;
   log("[2/6] board views and data selection");
-  spline_internal::Prepare(&state, data, so, log, &prep);
+  spline_internal::Prepare(&state, data, so, init, log, &prep);
 
   DiscreteCalibrationResult out;
   DiscreteProblem dp(&prep, options, so, log);

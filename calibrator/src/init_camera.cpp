@@ -317,6 +317,22 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   if (result.outliers > 0 &&
       !Refine(&camera, &views, refs, keep, options.estimate_distortion, options))
     throw InitError(kStage, camera_name, "the refinement without outliers failed");
+  // Views that are all nearly fronto-parallel (or alike) leave focal length and board depth
+  // trading freely: the refinement then walks far from any plausible focal length (towards an
+  // orthographic camera), which the guess (within ~20 %) rules out.
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] != "fu" && names[i] != "fv")
+      continue;
+    const double ratio =
+        camera.params()[static_cast<long>(i)] / guess.params()[static_cast<long>(i)];
+    if (!(ratio > 1.0 / options.max_focal_ratio && ratio < options.max_focal_ratio))
+      throw InitError(kStage, camera_name,
+                      Format("the board views do not determine the focal length: the refinement "
+                             "moved %s from %.1f to %.4g px (views nearly fronto-parallel or "
+                             "alike: tilt the board relative to the camera)",
+                             names[i].c_str(), guess.params()[static_cast<long>(i)],
+                             camera.params()[static_cast<long>(i)]));
+  }
   result.rms_px = Rms(ReprojectionErrors(camera, views, refs), &keep);
   result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
   result.views = static_cast<int>(views.size());

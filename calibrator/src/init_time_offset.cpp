@@ -130,7 +130,13 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
     const bool left_ok = i == 0 || corr[static_cast<std::size_t>(i - 1)] <= c;
     const bool right_ok =
         i + 1 == static_cast<int>(corr.size()) || corr[static_cast<std::size_t>(i + 1)] <= c;
-    if (left_ok && right_ok && c > result.secondary_correlation) {
+    // A distinct peak: the correlation falls by min_secondary_prominence between it and the
+    // main one (noise ripples on the broad lobe of a slow motion do not).
+    double valley = c;
+    for (int j = std::min(i, p); j <= std::max(i, p); ++j)
+      valley = std::min(valley, corr[static_cast<std::size_t>(j)]);
+    if (left_ok && right_ok && c - valley >= options.min_secondary_prominence &&
+        c > result.secondary_correlation) {
       result.secondary_correlation = c;
       result.secondary_offset = (i - half) * options.coarse_step;
     }

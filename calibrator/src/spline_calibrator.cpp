@@ -8,6 +8,7 @@
 #include <sstream>
 #include <thread>
 
+#include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/calibrator/knot_spacing.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/observability/motion_prediction.h"
@@ -53,7 +54,8 @@ std::string Fmt(const char* format, double a, double b = 0.0, double c = 0.0) {
 namespace spline_internal {
 
 void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& data,
-             const SplineCalibratorOptions& options, const CalibrationLog& log, Prepared* prep) {
+             const SplineCalibratorOptions& options, const CoarseInitResult& init,
+             const CalibrationLog& log, Prepared* prep) {
   prep->state = state;
   const RigConfig& rig = state->rig();
   const Board board(rig.target);
@@ -134,23 +136,39 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
             bw.accel_hz, bw.knot_spacing_s));
   }
 
-  // Samples whose base time lies inside the trajectory (a margin for moving time offsets).
-  const std::int64_t margin_ns = 10000000;  // 10 ms
-  const std::int64_t lo = prep->t0_ns + margin_ns;
-  const std::int64_t hi = prep->t1_ns - margin_ns;
-  const auto inside = [&](std::int64_t t_ns, double offset) {
+  // Samples whose base time lies inside the trajectory, kept 10 ms plus the sensor's remaining
+  // time-offset uncertainty (coarse_init.h) away from its ends: the offsets still move in the
+  // solve, and a sample moved past an end would extrapolate the end segment.
+  const auto margin_ns = [&](const SensorState& s) {
+    return 10000000LL +
+           static_cast<std::int64_t>(std::llround(init.OffsetUncertainty(s.name()) * 1e9));
+  };
+  const auto inside = [&](std::int64_t t_ns, double offset, std::int64_t margin) {
     const std::int64_t tb = t_ns + static_cast<std::int64_t>(std::llround(offset * 1e9));
-    return tb >= lo && tb <= hi;
+    return tb >= prep->t0_ns + margin && tb <= prep->t1_ns - margin;
+  };
+  const auto log_dropped = [&](const SensorState& s, std::size_t dropped, std::size_t total,
+                               std::int64_t margin) {
+    if (dropped > 0)
+      log("  " + s.name() + ": " + std::to_string(dropped) + " of " + std::to_string(total) +
+          " samples outside the trajectory at time offset " +
+          Fmt("%.4f s (margin %.1f ms) dropped", s.is_base ? 0.0 : s.time_offset,
+              1e-6 * static_cast<double>(margin)));
   };
   for (PreparedCamera& cam : prep->cameras) {
     SensorState& s = *cam.state;
     const SensorData& d = data_of(s.name());
-    std::size_t v = 0;
+    const std::int64_t margin = margin_ns(s);
+    std::size_t v = 0, dropped = 0;
     for (const CornerObservation& c : d.corners) {
       while (v < cam.views.size() && cam.views[v].t_ns < c.t_ns)
         ++v;
-      if (v == cam.views.size() || cam.views[v].t_ns != c.t_ns || !inside(c.t_ns, s.time_offset))
+      if (v == cam.views.size() || cam.views[v].t_ns != c.t_ns)
         continue;
+      if (!inside(c.t_ns, s.time_offset, margin)) {
+        ++dropped;
+        continue;
+      }
       // Only corners that project validly at the guess enter (the residual fails elsewhere).
       const Eigen::Vector3d p_C = cam.views[v].T_C_W * board.Corner(c.corner_id);
       Eigen::Vector2d uv;
@@ -164,7 +182,9 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
       m.sigma_px = c.sigma.value_or(s.config.pixel_sigma);
       cam.corners.push_back(m);
       cam.stamps.push_back(c.t_ns);
+      cam.corner_ids.push_back(c.corner_id);
     }
+    log_dropped(s, dropped, d.corners.size(), margin);
     cam.removed.assign(cam.corners.size(), false);
   }
 
@@ -174,6 +194,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
     PreparedInertial in;
     in.state = &s;
     const double offset = s.is_base ? 0.0 : s.time_offset;
+    const std::int64_t margin = margin_ns(s);
     std::int64_t first = 0, last = 0, own_lo = 0, own_hi = 0;
     if (s.config.type == SensorType::kImu) {
       if (!d.imu.empty()) {
@@ -181,7 +202,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
         own_hi = d.imu.back().t_ns;
       }
       for (const ImuSample& z : d.imu) {
-        if (inside(z.t_ns, offset))
+        if (inside(z.t_ns, offset, margin))
           in.imu.push_back(z);
       }
       if (!in.imu.empty()) {
@@ -194,7 +215,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
         own_hi = d.gyro.back().t_ns;
       }
       for (const GyroSample& z : d.gyro) {
-        if (inside(z.t_ns, offset))
+        if (inside(z.t_ns, offset, margin))
           in.gyro.push_back(z);
       }
       if (!in.gyro.empty()) {
@@ -203,6 +224,8 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
       }
     }
     const std::size_t n = in.imu.size() + in.gyro.size();
+    if (!s.is_base)
+      log_dropped(s, d.imu.size() + d.gyro.size() - n, d.imu.size() + d.gyro.size(), margin);
     if (n < 100 || last - first < 1000000000LL)
       throw CalibrationInputError(
           "sensor time ranges do not overlap: sensors." + s.name() + " [" + Seconds(own_lo) + ", " +
@@ -451,9 +474,11 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
 
   log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu);
   CalibrationState state(rig);
+  const CoarseInitResult init = InitializeFromData(&state, data, options.coarse_init, log);
   Prepared prep;
   log("[2/6] board views and data selection");
-  Prepare(&state, data, options, log, &prep);
+  Prepare(&state, data, options, init, log, &prep);
+  SeedBiasSplines(init, &state);
   log(Fmt("  trajectory: %.3f .. %.3f s (base clock), knot spacing %.4f s",
           1e-9 * static_cast<double>(prep.t0_ns), 1e-9 * static_cast<double>(prep.t1_ns),
           prep.knot_spacing_s));

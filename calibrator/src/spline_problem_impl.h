@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 
 // TODO(residuals): bias_random_walk_residual.h uses Jacobian<> unqualified; this using makes it
@@ -47,6 +48,7 @@ struct PreparedCamera {
   SensorState* state = nullptr;
   std::vector<CornerMeasurement> corners;  // corners of frames with a board view
   std::vector<std::int64_t> stamps;        // image stamp of each corner (camera clock)
+  std::vector<int> corner_ids;             // board corner id of each corner (the report)
   std::vector<bool> removed;               // outliers
   std::vector<BoardView> views;
   int invalid = 0;
@@ -72,7 +74,8 @@ struct Prepared {
 // splines. Throws CalibrationInputError naming the sensor for data the calibration cannot use.
 // Shared with the discrete calibrator (the same data and board views).
 void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& data,
-             const SplineCalibratorOptions& options, const CalibrationLog& log, Prepared* prep);
+             const SplineCalibratorOptions& options, const CoarseInitResult& init,
+             const CalibrationLog& log, Prepared* prep);
 
 // Priors of `prior_sigma` on the estimated blocks, centred on `centers` (one per block, the
 // input's guesses); returns their residual ids. Shared with the discrete calibrator.
@@ -92,6 +95,11 @@ void FinishResult(
 
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback);
+
+// The report data of the final values (report_data_builder.h), from the prepared data
+// (spline_report_data.cpp).
+report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvaluator& trajectory,
+                                    const SplineCalibrationResult& result);
 
 // Prints each iteration's cost and time.
 class IterationLogger : public ceres::IterationCallback {
@@ -295,6 +303,16 @@ class SplineProblem {
 
   ceres::Problem& problem() { return *problem_; }
 
+  // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
+  Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
+    const int seg = SegmentOf(t_ns, 0.0);
+    const SegmentClock clock = SegmentClock::At(t_ns, spline_.timing(), seg);
+    Se3Kinematics<double> kin;
+    Spline::template EvaluateSegment<double>(spline_.SegmentBlocks(seg).data(), clock.U(),
+                                             clock.inv_dt, derivatives, nullptr, &kin);
+    return kin;
+  }
+
  private:
   std::int64_t Clamp(std::int64_t t_ns) const {
     return std::min(std::max(t_ns, spline_.MinTimeNs()), spline_.MaxTimeNs());
@@ -455,7 +473,9 @@ class SplineProblem {
   // Priors of `prior_sigma` on the estimated blocks, centred on the input's guesses.
   void AddPriors() {
     if (prior_center_.empty()) {
-      for (const ParameterBlockInfo& b : blocks_)
+      // On the rig file's values, not on the initialisation's (coarse_init.h): same block order.
+      CalibrationState guess(state_.rig());
+      for (const ParameterBlockInfo& b : guess.Blocks())
         prior_center_.emplace_back(b.values, b.values + b.ambient_size);
     }
     const std::vector<ceres::ResidualBlockId> ids =
@@ -684,6 +704,15 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   const auto t_cov = Clock::now();
   sp.Finish(out);
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
+  if (options.report_data) {
+    const auto t_report = Clock::now();
+    out->report_data = SplineReportData(
+        *prep, [&sp](std::int64_t t_ns, int d) { return sp.EvaluateClamped(t_ns, d); }, *out);
+    char line[120];
+    std::snprintf(line, sizeof line, "  report data: every measurement at the final values, %.2f s",
+                  std::chrono::duration<double>(Clock::now() - t_report).count());
+    log(line);
+  }
 }
 
 }  // namespace spline_internal

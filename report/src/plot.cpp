@@ -9,11 +9,14 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace ctcal::report {
 namespace {
@@ -75,8 +78,16 @@ std::vector<double> Ticks(double lo, double hi, int n) {
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
   const double f = raw / mag;
   const double step = mag * (f < 1.5 ? 1.0 : f < 3.0 ? 2.0 : f < 7.0 ? 5.0 : 10.0);
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
+  // Counted, not accumulated: a range far narrower than its magnitude (a constant sample
+  // interval with 1e-12 jitter) would make `v += step` a no-op and the loop endless.
+  const double first = std::ceil(lo / step - 1e-9);
+  const double count = std::floor(hi / step + 1e-9) - first;
+  if (!(count >= 0.0 && count <= 100.0))
+    return t;
+  for (int i = 0; i <= static_cast<int>(count); ++i) {
+    const double v = (first + i) * step;
     t.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+  }
   return t;
 }
 
@@ -91,7 +102,8 @@ void Range(const std::vector<double>& v, double* lo, double* hi) {
 
 // Pads a degenerate or tight range so that data do not sit on the frame.
 void Pad(double* lo, double* hi, double frac) {
-  if (!(*hi > *lo)) {
+  // A range below 1e-9 of its magnitude is rounding noise on one value: treat it as one value.
+  if (!(*hi - *lo > 1e-9 * std::max(std::abs(*lo), std::abs(*hi)))) {
     const double c = std::isfinite(*lo) ? *lo : 0.0;
     const double d = std::max(std::abs(c) * 0.1, 1e-9);
     *lo = c - d;
@@ -455,23 +467,86 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
         SetColor(cr, s.color);
         cairo_set_line_width(cr, s.width);
         bool pen = false;  // NaN breaks the line
-        for (size_t i = 0; i < n; ++i) {
-          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-            pen = false;
-            continue;
-          }
+        const auto point = [&](size_t i) {
           if (pen)
             cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           else
             cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           pen = true;
+        };
+        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as each half-point
+        // column's first, lowest, highest and last point: the same picture (spikes kept) at a
+        // fraction of the path, so that the PDF stays small and fast to view.
+        const bool thin = s.kind == Series::Kind::kLine && static_cast<double>(n) > 4 * p.w;
+        size_t first = n, lo = n, hi = n, last = n;
+        double column = 0.0;
+        const auto flush = [&]() {
+          if (first == n)
+            return;
+          std::array<size_t, 4> idx{first, std::min(lo, hi), std::max(lo, hi), last};
+          for (size_t k = 0; k < idx.size(); ++k) {
+            if (k == 0 || idx[k] != idx[k - 1])
+              point(idx[k]);
+          }
+          first = n;
+        };
+        for (size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+            flush();
+            pen = false;
+            continue;
+          }
+          if (!thin) {
+            point(i);
+            continue;
+          }
+          const double c = std::floor(2.0 * ax.X(s.x[i]));
+          if (first != n && c != column)
+            flush();
+          if (first == n) {
+            first = lo = hi = last = i;
+            column = c;
+            continue;
+          }
+          last = i;
+          if (s.y[i] < s.y[lo])
+            lo = i;
+          if (s.y[i] > s.y[hi])
+            hi = i;
         }
+        flush();
         cairo_stroke(cr);
         break;
       }
       case Series::Kind::kScatter: {
+        // A dot on (nearly) the spot of an earlier dot of the same colour adds nothing to the
+        // picture but bytes: 100k+ corners of a minute's recording pile up in the centre.
+        // Beyond kRasterDots dots a vector page is still tens of MB and slow to open: the dots
+        // are drawn into an image at kRasterScale px per pt instead (same look, a fixed size).
+        constexpr size_t kRasterDots = 20000;
+        constexpr double kRasterScale = 3.0;
+        cairo_t* const page = cr;
+        cairo_surface_t* image = nullptr;
+        if (n > kRasterDots) {
+          image = cairo_image_surface_create(CAIRO_FORMAT_ARGB32,
+                                             static_cast<int>(std::ceil(p.w * kRasterScale)),
+                                             static_cast<int>(std::ceil(p.h * kRasterScale)));
+          cr = cairo_create(image);
+          cairo_scale(cr, kRasterScale, kRasterScale);
+          cairo_translate(cr, -p.x, -p.y);
+        }
+        std::unordered_set<std::uint64_t> drawn;
+        const double cell = std::max(0.25 * s.width, 0.1);
         for (size_t i = 0; i < n; ++i) {
           if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
+            continue;
+          const double u = (i < s.value.size() && vh > vl) ? (s.value[i] - vl) / (vh - vl) : 0.5;
+          const auto cx =
+              static_cast<std::uint64_t>(std::clamp(ax.X(s.x[i]) / cell + 1e5, 0.0, 2e5));
+          const auto cy =
+              static_cast<std::uint64_t>(std::clamp(ax.Y(s.y[i]) / cell + 1e5, 0.0, 2e5));
+          const auto shade = static_cast<std::uint64_t>(std::clamp(u, 0.0, 1.0) * 63.0);
+          if (!drawn.insert((cx << 32) | (cy << 8) | shade).second)
             continue;
           Color c = s.color;
           if (i < s.value.size())
@@ -480,6 +555,17 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
           SetColor(cr, c);
           cairo_arc(cr, ax.X(s.x[i]), ax.Y(s.y[i]), s.width, 0, 2 * M_PI);
           cairo_fill(cr);
+        }
+        if (image != nullptr) {
+          cairo_destroy(cr);
+          cr = page;
+          cairo_save(cr);
+          cairo_translate(cr, p.x, p.y);
+          cairo_scale(cr, 1.0 / kRasterScale, 1.0 / kRasterScale);
+          cairo_set_source_surface(cr, image, 0.0, 0.0);
+          cairo_paint(cr);
+          cairo_restore(cr);
+          cairo_surface_destroy(image);
         }
         break;
       }
@@ -699,7 +785,25 @@ void Table::Draw(void* cairo, const Rect& area) const {
   double total = 0;
   for (const double x : w)
     total += x;
-  const double scale = total > p.w ? p.w / total : 1.0;
+  if (total > p.w) {
+    // Too wide: cap the widest columns at one common width, so that narrow ones (status,
+    // sensor) stay whole and only long text is cut.
+    std::vector<double> sorted(w);
+    std::sort(sorted.begin(), sorted.end());
+    double below = 0.0, cap = p.w / static_cast<double>(cols);
+    for (size_t i = 0; i < sorted.size(); ++i) {
+      const double c = (p.w - below) / static_cast<double>(sorted.size() - i);
+      if (c <= sorted[i]) {
+        cap = c;
+        break;
+      }
+      below += sorted[i];
+    }
+    for (double& x : w)
+      x = std::min(x, cap);
+    total = p.w;
+  }
+  const double scale = 1.0;
   const double rh = font_size * 1.65;
   double y = p.y;
   for (size_t r = 0; r < rows.size() && y + rh <= p.y + p.h + 0.5; ++r) {
@@ -771,6 +875,13 @@ void Trajectory3D::Draw(void* cairo, const Rect& area) const {
   }
   const double extent = std::max((hi3 - lo3).maxCoeff(), 1e-3);
   const double triad = 0.08 * extent;
+  // The bounding box is drawn too: its corners stick out of the path's outline in most views.
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1) ? hi3.x() : lo3.x(), (k & 2) ? hi3.y() : lo3.y(),
+                                 (k & 4) ? hi3.z() : lo3.z());
+    lo = lo.cwiseMin(proj(corner));
+    hi = hi.cwiseMax(proj(corner));
+  }
   lo -= Eigen::Vector2d::Constant(triad * 1.5);
   hi += Eigen::Vector2d::Constant(triad * 1.5);
   const double s = std::min(p.w / (hi.x() - lo.x()), p.h / (hi.y() - lo.y()));
@@ -898,6 +1009,41 @@ void MatrixPlot::Draw(void* cairo, const Rect& area) const {
       const std::string s = Fit(cr, names[i], label_w - 4);
       Text(cr, s, p.x - 3, p.y + (i + 0.5) * cell, 1.0, 0.5);
       Text(cr, s, p.x + (i + 0.5) * cell, p.y + p.h + 3, 1.0, 0.5, -M_PI / 2);
+    }
+  } else if (!names.empty()) {
+    // Too many for a label each: one per quantity (`cam0.intrinsics`, the name up to its
+    // index), with thin lines between the quantities so that blocks can be told apart.
+    std::vector<std::pair<int, int>> groups;
+    std::vector<std::string> keys;
+    for (int i = 0; i < n && i < static_cast<int>(names.size()); ++i) {
+      const std::string key = names[i].substr(0, names[i].find('['));
+      if (keys.empty() || keys.back() != key) {
+        groups.emplace_back(i, i + 1);
+        keys.push_back(key);
+      } else {
+        groups.back().second = i + 1;
+      }
+    }
+    cairo_set_source_rgba(cr, 0.2, 0.2, 0.2, 0.35);
+    cairo_set_line_width(cr, 0.4);
+    for (const auto& [begin, end] : groups) {
+      if (begin == 0)
+        continue;
+      cairo_move_to(cr, p.x + begin * cell, p.y);
+      cairo_line_to(cr, p.x + begin * cell, p.y + p.h);
+      cairo_move_to(cr, p.x, p.y + begin * cell);
+      cairo_line_to(cr, p.x + p.w, p.y + begin * cell);
+    }
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const double span = (groups[g].second - groups[g].first) * cell;
+      if (span < 5.0)
+        continue;
+      const double mid = (groups[g].first + groups[g].second) * 0.5 * cell;
+      const std::string s = Fit(cr, keys[g], label_w - 4);
+      Text(cr, s, p.x - 3, p.y + mid, 1.0, 0.5);
+      Text(cr, s, p.x + mid, p.y + p.h + 3, 1.0, 0.5, -M_PI / 2);
     }
   }
   ColorBar(cr, Rect{p.x + p.w + 10, p.y, 12, p.h}, -1.0, 1.0, "correlation",

@@ -330,15 +330,18 @@ class Builder {
   Section TrajectorySection() {
     Section sec("sec-trajectory", "Estimated poses in 3-D");
     if (data_.trajectory.empty()) {
-      sec.omitted = "no trajectory (report_data/trajectory.csv absent)";
+      sec.omitted = rig_.IsCameraOnly()
+                        ? "a camera-only rig has one board pose per frame, no trajectory"
+                        : "no trajectory (report_data/trajectory.csv absent)";
       return sec;
     }
     auto f = NewFigure("fig-trajectory", "Base IMU trajectory T_W_B", 1, 2);
-    for (const double az : {-60.0, 30.0}) {
+    for (const bool oblique : {true, false}) {
       auto& v = f->Add<Trajectory3D>();
-      v.azimuth_deg = az;
-      v.elevation_deg = az < 0 ? 25.0 : 60.0;
-      v.title = az < 0 ? "oblique view" : "top-down view";
+      // Top-down: azimuth -90 deg puts world x to the right and y up on the page.
+      v.azimuth_deg = oblique ? -60.0 : -90.0;
+      v.elevation_deg = oblique ? 25.0 : 90.0;
+      v.title = oblique ? "oblique view" : "top-down view (x right, y up)";
       for (const auto& p : data_.trajectory) {
         v.p_W.push_back(p.p_W_B);
         v.R_W.push_back(p.q_W_B.normalized().toRotationMatrix());
@@ -437,26 +440,31 @@ class Builder {
       InertialFigures(&sec, s, a->second, "accel", "m/s^2", s.noise.AccelSampleSigma());
     if (b != data_.bias.end()) {
       const bool both = !b->second.gyro.empty() && !b->second.accel.empty();
-      auto f = NewFigure("fig-" + s.name + "-bias",
-                         s.name + ": bias estimates with +-3 sigma envelopes", both ? 2 : 1, 3);
+      auto f =
+          NewFigure("fig-" + s.name + "-bias",
+                    s.name + ": bias estimates with +-3 sigma random-walk envelopes from the start",
+                    both ? 2 : 1, 3);
       for (const auto* part : {&b->second.gyro, &b->second.accel}) {
         if (part->empty())
           continue;
         const bool gyro = part == &b->second.gyro;
         for (int ax = 0; ax < 3; ++ax) {
+          // The random-walk envelope opens from the bias at the track's start
+          // (report_data.h): where the stated random walk lets the true bias wander.
           std::vector<double> t, v, lo, hi;
+          const double b0 = part->front().b[ax];
           for (const auto& r : *part) {
             t.push_back(Sec(r.t_ns));
             v.push_back(r.b[ax]);
-            lo.push_back(r.b[ax] - 3 * r.sigma[ax]);
-            hi.push_back(r.b[ax] + 3 * r.sigma[ax]);
+            lo.push_back(b0 - 3 * r.sigma[ax]);
+            hi.push_back(b0 + 3 * r.sigma[ax]);
           }
           auto& p = f->Add<XYPlot>();
           p.title = std::string(gyro ? "gyro " : "accel ") + "xyz"[ax];
           p.x_label = "time [s]";
           p.y_label = gyro ? "rad/s" : "m/s^2";
           p.legend = ax == 0;
-          p.Band(t, lo, hi, "+-3 sigma", PaletteColor(gyro ? 0 : 1));
+          p.Band(t, lo, hi, "+-3 sigma random walk", PaletteColor(gyro ? 0 : 1));
           p.Line(t, v, "bias", PaletteColor(gyro ? 0 : 1), 1.5);
         }
       }
@@ -503,16 +511,19 @@ class Builder {
       p.equal_aspect = true;
       p.ScatterByValue(du, dv, frame, 1.6);
       auto& t = f->Add<XYPlot>();
-      t.title = "per-image RMS over time";
+      t.title = "per-image RMS over time (per coordinate)";
       t.x_label = "time [s]";
       t.y_label = "RMS [px]";
       std::vector<double> ft, fr;
       for (const auto& [k, pf] : per_frame) {
         ft.push_back(pf.first);
-        fr.push_back(std::sqrt(pf.second.first / std::max(pf.second.second, 1)));
+        fr.push_back(std::sqrt(pf.second.first / (2.0 * std::max(pf.second.second, 1))));
       }
       t.Line(ft, fr, "", PaletteColor(0), 1.0);
       t.Scatter(ft, fr, "", PaletteColor(0), 1.8);
+      // What a frame's RMS scatters about when the stated noise holds.
+      if (s.pixel_sigma > 0)
+        t.HLine(s.pixel_sigma, "pixel_sigma", PaletteColor(3));
       sec.figures.push_back(f);
     }
     {
@@ -677,7 +688,11 @@ class Builder {
       sec.omitted = "no correlation matrix (report_data/correlation.csv absent)";
       return sec;
     }
-    auto f = NewFigure("fig-correlation", "Parameter correlation (trajectory marginalised)", 1, 1);
+    auto f = NewFigure("fig-correlation",
+                       rig_.IsCameraOnly()
+                           ? "Parameter correlation (board poses marginalised)"
+                           : "Parameter correlation (trajectory and biases marginalised)",
+                       1, 1);
     auto& m = f->Add<MatrixPlot>();
     m.values = data_.correlation.values;
     m.names = data_.correlation.names;
@@ -1004,8 +1019,15 @@ std::vector<Check> EvaluateChecks(const RigConfig& result, const ReportData& dat
     obs.value = "not analysed";
   } else {
     const auto& o = *result.observability;
-    obs.value = std::to_string(o.unobservable.size()) + " unobservable, " +
-                std::to_string(o.weak.size()) + " weak";
+    // The names themselves, so that the first page says what to fix (up to three of each).
+    const auto names = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (std::size_t i = 0; i < v.size() && i < 3; ++i)
+        s += (i ? ", " : " (") + v[i];
+      return v.empty() ? s : s + (v.size() > 3 ? ", ...)" : ")");
+    };
+    obs.value = std::to_string(o.unobservable.size()) + " unobservable" + names(o.unobservable) +
+                ", " + std::to_string(o.weak.size()) + " weak" + names(o.weak);
     obs.status = !o.unobservable.empty() ? Status::kFail
                  : !o.weak.empty()       ? Status::kWarn
                                          : Status::kPass;

@@ -333,4 +333,20 @@ ReportData LoadReportData(const std::string& out_dir, const std::vector<std::str
   return d;
 }
 
+void WriteReportData(const std::string& out_dir, const ReportData& d) {
+  for (const auto& [s, rows] : d.corners)
+    WriteCornerResiduals(out_dir, s, rows);
+  for (const auto& [s, rows] : d.gyro)
+    WriteGyroSamples(out_dir, s, rows);
+  for (const auto& [s, rows] : d.accel)
+    WriteAccelSamples(out_dir, s, rows);
+  for (const auto& [s, track] : d.bias)
+    WriteBiasTrack(out_dir, s, track);
+  if (!d.trajectory.empty())
+    WriteTrajectory(out_dir, d.trajectory);
+  if (!d.correlation.names.empty())
+    WriteCorrelation(out_dir, d.correlation);
+  WriteRunInfo(out_dir, d.run_info);
+}
+
 }  // namespace ctcal::report

@@ -13,12 +13,15 @@
 //      residual statistics, the result rig.
 #pragma once
 
+#include <Eigen/Core>
 #include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "ctcal/calibrator/init/coarse_init.h"
+#include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 #include "ctcal/spline/se3_spline.h"
@@ -56,6 +59,11 @@ struct SplineCalibratorOptions {
   int min_views = 10;
   int max_rebucket_rounds = 3;
   bool compute_covariance = true;
+  // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
+  // (report_data_builder.h), in SplineCalibrationResult::report_data.
+  bool report_data = true;
+  // The coarse-guess initialisation before the trajectory is built (init/coarse_init.h).
+  CoarseInitOptions coarse_init;
 };
 
 struct CameraOutliers {
@@ -83,6 +91,7 @@ struct SplineCalibrationResult {
   std::vector<std::string> covariance_names;
   Eigen::MatrixXd covariance;
   Eigen::VectorXd data_sigma;
+  report::ReportData report_data;  // everything but run_info (the caller's; report_data_builder.h)
 };
 
 // Receives every progress line (stages, iterations with their cost, warnings).

@@ -16,7 +16,10 @@
 // du, dv = measured - predicted in px, `whitened` = |(du, dv)| / sigma_px (the norm of the
 // whitened 2-vector), `outlier` 0/1 (1: removed from the final solve); inertial `meas` is the raw
 // sample, `pred` the model's prediction of it including biases, in the sensor's own units
-// (rad/s, m/s^2); bias sigma is the 1-sigma of the estimate. Every file starts with one `#`
+// (rad/s, m/s^2); bias sigma is the random walk's 1-sigma spread since the track's first row,
+// sigma_rw sqrt(t - t_first) (Kalibr's bias envelope; the report draws +-3 sigma around the
+// bias at t_first; calibrator/report_data_builder.h says why not the estimate's marginal
+// sigma). Every file starts with one `#`
 // header line naming its columns. Doubles are written as the shortest decimal that reads back
 // exactly (sensors/number_format.h; non-finite as .nan / .inf / -.inf).
 //
@@ -118,5 +121,9 @@ struct ReportData {
 
 // Reads the files of every sensor name given (the rig's sensors).
 ReportData LoadReportData(const std::string& out_dir, const std::vector<std::string>& sensors);
+
+// Writes every file of `data` (the inverse of LoadReportData; empty tables write no file, except
+// run_info.csv, which is always written).
+void WriteReportData(const std::string& out_dir, const ReportData& data);
 
 }  // namespace ctcal::report

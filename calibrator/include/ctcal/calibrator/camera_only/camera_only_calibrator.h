@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
 
@@ -57,6 +58,7 @@ struct CameraOnlyResult {
   std::map<std::string, CameraOnlyCameraReport> cameras;
   std::vector<std::string> warnings;  // also written to the log
   int poses = 0;                      // board poses estimated
+  report::ReportData report_data;     // corner rows and correlation (report_data_builder.h)
 };
 
 // Throws std::runtime_error (or InitError, naming the stage and camera) with one clear message:

@@ -24,6 +24,7 @@ struct IntrinsicsInitOptions {
   double cauchy_px = 2.0;   // robust loss scale of the refinement, px
   double outlier_px = 3.0;  // corners whose error exceeds max(outlier_px, 5 robust sigma) drop
   bool estimate_distortion = true;  // false: only the projection parameters move
+  double max_focal_ratio = 1.5;     // a refined focal length this far from the guess: InitError
   int max_iterations = 60;
 };
 
@@ -49,8 +50,9 @@ struct IntrinsicsInitResult {
 //  c. Ceres refinement of all intrinsics and the board poses with the model's templated projection
 //     and a Cauchy loss: projection parameters first (distortion held), then everything, then
 //     once more without the outlier corners.
-// Throws InitError (stage "camera intrinsics") with fewer than min_views usable frames or when
-// the refinement does not converge to a valid model.
+// Throws InitError (stage "camera intrinsics") with fewer than min_views usable frames, when
+// the refinement does not converge to a valid model, or when it moves a focal length beyond
+// max_focal_ratio of the guess (views that do not determine it, e.g. all fronto-parallel).
 IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const CameraModel& guess,
                                           const Board& board,
                                           const std::vector<CornerObservation>& corners,

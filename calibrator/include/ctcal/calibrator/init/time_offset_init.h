@@ -17,6 +17,9 @@ struct TimeOffsetOptions {
   double min_rate_std = 0.05;         // rad/s, below: "no rotation"
   double min_peak_correlation = 0.6;  // normalised correlation the peak must reach
   double max_secondary_ratio = 0.9;   // a second peak this close to the first: ambiguous
+  // A second local maximum counts as a peak only when the correlation dips by this much between
+  // it and the first (a ripple on the main lobe is not an alternative offset).
+  double min_secondary_prominence = 0.05;
   int min_samples = 20;
   // Subtract each gyro's per-axis median before taking magnitudes. Off by default: a median is a
   // poor bias estimate for an asymmetric motion and shifted the peak by up to 6 ms in tests,
