@@ -1,7 +1,9 @@
-// `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline] [--threads N]` (SPEC
-// section 8): loads the rig and the dataset, runs the continuous-time calibrator
-// (calibrator/spline_calibrator.h) and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and
-// the report (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h).
+// `ctcal calibrate --rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both]
+// [--threads N]` (SPEC section 8): loads the rig and the dataset, runs the continuous-time
+// calibrator (calibrator/spline_calibrator.h), the discrete one (discrete_calibrator.h) or both
+// with a cross-check, and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and the report
+// (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h; spline method only).
+// `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml.
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -13,6 +15,8 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
+#include "ctcal/calibrator/discrete/crosscheck.h"
+#include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/kalibr_files.h"
@@ -50,6 +54,67 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   return kExitOk;
 }
 
+// Writes one full result (result.yaml, Kalibr files) into `dir` and prints its table.
+void WriteResult(const SplineCalibrationResult& result, const std::string& dir,
+                 const CalibrationLog& log) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  SaveRig(result.result, dir + "/result.yaml");
+  SaveKalibrFiles(result.result, dir);
+  log("");
+  log(FormatParameterTable(result.result));
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "done: %d iterations, %.2f s solving (%.3f s per iteration), %.2f s covariance, "
+                "%.2f s total",
+                result.iterations, result.solve_seconds, result.seconds_per_iteration,
+                result.covariance_seconds, result.total_seconds);
+  log(line);
+  log("wrote " + dir + "/result.yaml, camchain-imucam.yaml, imu.yaml");
+}
+
+// --method discrete | both (docs/discrete.md): `both` writes OUT/spline/, OUT/discrete/ and
+// OUT/crosscheck.yaml. Returns the exit code.
+int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConfig& rig,
+                      const std::map<std::string, SensorData>& data,
+                      const SplineCalibratorOptions& spline_options,
+                      const DiscreteCalibratorOptions& discrete_options, const std::string& out_dir,
+                      const CalibrationLog& log, std::ofstream& log_file) {
+  SplineCalibrationResult spline;
+  DiscreteCalibrationResult discrete;
+  try {
+    if (method == "both") {
+      log("=== spline ===");
+      spline = CalibrateSpline(rig, data, spline_options, log);
+      log("=== discrete ===");
+    }
+    discrete = CalibrateDiscrete(rig, data, discrete_options, log);
+  } catch (const CalibrationInputError& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.InputError(e.what());
+  } catch (const std::exception& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.RunFailed(e.what());
+  }
+  try {
+    if (method == "discrete") {
+      WriteResult(discrete, out_dir, log);
+      return kExitOk;
+    }
+    WriteResult(spline, out_dir + "/spline", log);
+    WriteResult(discrete, out_dir + "/discrete", log);
+    const CrossCheck check = MakeCrossCheck(spline.result, discrete.result);
+    SaveCrossCheck(check, out_dir + "/crosscheck.yaml");
+    log("");
+    log("cross-check (discrete - spline; flagged: |difference| > the smaller sigma)");
+    log(FormatCrossCheck(check));
+    log("wrote " + out_dir + "/crosscheck.yaml");
+  } catch (const std::exception& e) {
+    return cli.RunFailed(e.what());
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int RunCalibrate(int argc, char** argv) {
@@ -59,13 +124,19 @@ int RunCalibrate(int argc, char** argv) {
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma.");
-  std::string rig_path, data_dir, out_dir, method, representation, init_policy;
+  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity;
   SplineCalibratorOptions options;
+  DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
                               "rig file with initial guesses (SPEC section 7)")(
       "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
       "out", po::value(&out_dir)->required(), "output folder")(
-      "method", po::value(&method)->default_value("spline"), "spline (discrete, both: later)")(
+      "method", po::value(&method)->default_value("spline"),
+      "spline, discrete (MVIS keyframes) or both (and a cross-check)")(
+      "aux-velocity", po::value(&aux_velocity)->default_value("state"),
+      "discrete: auxiliary IMU velocity as a state or rigid (appendix B)")(
+      "keyframe-rate", po::value(&discrete_options.keyframe_rate_hz)->default_value(0.0),
+      "discrete: keyframe rate in Hz (0: the camera frame times)")(
       "threads", po::value(&options.threads)->default_value(0), "solver threads (0: all cores)")(
       "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
       "per-corner-blocks", po::bool_switch(),
@@ -87,9 +158,16 @@ int RunCalibrate(int argc, char** argv) {
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
   options.compress_frames = !cli.vm()["per-corner-blocks"].as<bool>();
-  if (method != "spline")
-    return cli.UsageError("--method " + method +
-                          ": only 'spline' is implemented (discrete and both come later)");
+  if (method != "spline" && method != "discrete" && method != "both")
+    return cli.UsageError("--method must be spline, discrete or both, got " + method);
+  if (aux_velocity == "state")
+    discrete_options.aux_velocity = AuxVelocityModel::kState;
+  else if (aux_velocity == "rigid")
+    discrete_options.aux_velocity = AuxVelocityModel::kRigid;
+  else
+    return cli.UsageError("--aux-velocity must be state or rigid, got " + aux_velocity);
+  if (discrete_options.keyframe_rate_hz < 0.0)
+    return cli.UsageError("--keyframe-rate must be >= 0");
   if (representation == "split")
     options.representation = Se3Representation::kSplit;
   else if (representation == "joint")
@@ -148,6 +226,12 @@ int RunCalibrate(int argc, char** argv) {
 
   if (rig.IsCameraOnly())
     return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info);
+  if (method != "spline") {
+    discrete_options.threads = options.threads;
+    discrete_options.max_iterations = options.max_iterations;
+    return RunDiscreteOrBoth(cli, method, rig, data, options, discrete_options, out_dir, log,
+                             log_file);
+  }
 
   SplineCalibrationResult result;
   try {

@@ -49,8 +49,10 @@ std::string Fmt(const char* format, double a, double b = 0.0, double c = 0.0) {
   return line;
 }
 
-// Selects the data, finds the board views and the trajectory's time range, sizes the bias
-// splines. Throws CalibrationInputError naming the sensor for data the calibration cannot use.
+}  // namespace
+
+namespace spline_internal {
+
 void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& data,
              const SplineCalibratorOptions& options, const CoarseInitResult& init,
              const CalibrationLog& log, Prepared* prep) {
@@ -248,6 +250,10 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
   }
 }
 
+}  // namespace spline_internal
+
+namespace {
+
 // sigma of gravity_W (m/s^2, per component) from the 2x2 covariance of its sphere tangent.
 Eigen::Vector3d GravitySigma(const double* g, const Eigen::Matrix2d& cov_tangent) {
   ceres::SphereManifold<3> sphere;
@@ -278,6 +284,30 @@ ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
   if (callback != nullptr)
     so.callbacks.push_back(callback);
   return so;
+}
+
+std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
+    ceres::Problem* problem, const std::vector<ParameterBlockInfo>& blocks,
+    const std::vector<std::vector<double>>& centers, bool analytic) {
+  std::vector<ceres::ResidualBlockId> ids;
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    const ParameterBlockInfo& b = blocks[i];
+    if (!b.estimated || b.prior_sigma.empty())
+      continue;
+    const std::vector<double>& c = centers[i];
+    const Eigen::VectorXd sigma =
+        Eigen::Map<const Eigen::VectorXd>(b.prior_sigma.data(), b.tangent_size);
+    ceres::CostFunction* cost = nullptr;
+    if (b.left_rotation) {
+      cost = MakeRotationPrior(analytic, Eigen::Quaterniond(c[3], c[0], c[1], c[2]),
+                               Eigen::Vector3d(sigma));
+    } else {
+      cost = MakeVectorPrior(analytic, Eigen::Map<const Eigen::VectorXd>(c.data(), b.ambient_size),
+                             sigma);
+    }
+    ids.push_back(problem->AddResidualBlock(cost, nullptr, b.values));
+  }
+  return ids;
 }
 
 void FinishResult(

@@ -80,6 +80,19 @@ struct Prepared {
   double knot_spacing_s = 0.0;
 };
 
+// Selects the data, finds the board views and the trajectory's time range, sizes the bias
+// splines. Throws CalibrationInputError naming the sensor for data the calibration cannot use.
+// Shared with the discrete calibrator (the same data and board views).
+void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& data,
+             const SplineCalibratorOptions& options, const CoarseInitResult& init,
+             const CalibrationLog& log, Prepared* prep);
+
+// Priors of `prior_sigma` on the estimated blocks, centred on `centers` (one per block, the
+// input's guesses); returns their residual ids. Shared with the discrete calibrator.
+std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
+    ceres::Problem* problem, const std::vector<ParameterBlockInfo>& blocks,
+    const std::vector<std::vector<double>>& centers, bool analytic);
+
 // The marginal covariance and residual statistics, written into the result rig
 // (spline_calibrator.cpp).
 void FinishResult(
@@ -578,23 +591,9 @@ class SplineProblem {
       for (const ParameterBlockInfo& b : guess.Blocks())
         prior_center_.emplace_back(b.values, b.values + b.ambient_size);
     }
-    for (std::size_t i = 0; i < blocks_.size(); ++i) {
-      const ParameterBlockInfo& b = blocks_[i];
-      if (!b.estimated || b.prior_sigma.empty())
-        continue;
-      const std::vector<double>& c = prior_center_[i];
-      const Eigen::VectorXd sigma =
-          Eigen::Map<const Eigen::VectorXd>(b.prior_sigma.data(), b.tangent_size);
-      ceres::CostFunction* cost = nullptr;
-      if (b.left_rotation) {
-        cost = MakeRotationPrior(options_.analytic, Eigen::Quaterniond(c[3], c[0], c[1], c[2]),
-                                 Eigen::Vector3d(sigma));
-      } else {
-        cost = MakeVectorPrior(options_.analytic,
-                               Eigen::Map<const Eigen::VectorXd>(c.data(), b.ambient_size), sigma);
-      }
-      prior_ids_.push_back(problem_->AddResidualBlock(cost, nullptr, b.values));
-    }
+    const std::vector<ceres::ResidualBlockId> ids =
+        AddCalibrationPriors(problem_.get(), blocks_, prior_center_, options_.analytic);
+    prior_ids_.insert(prior_ids_.end(), ids.begin(), ids.end());
   }
 
   // --- spline fitting ---------------------------------------------------------------------------

@@ -111,12 +111,11 @@ TEST_F(DiscretePreintegration, NoiseFreeReproducesTruthRelativeMotion) {
     }
     std::printf("spacing %.2f s: max |r_R| %.2e rad, |r_v| %.2e m/s, |r_p| %.2e m\n", spacing,
                 max_r, max_v, max_p);
-    // The midpoint rule's error, h^2 / 12 * d2w/dt2 per unit time (~2.6e-5 rad over 0.1 s at
-    // 200 Hz on this motion): linear in the interval length. NOT yet the < 1e-6 rad the issue
-    // asks for; a higher-order quadrature (end-corrected trapezoid) is the next step.
-    EXPECT_LT(max_r, 3.5e-4 * spacing);
-    EXPECT_LT(max_v, 3e-3 * spacing);
-    EXPECT_LT(max_p, 3e-4 * spacing);
+    // Cubic readings + RK4 (preintegration.h): the issue's bound is 1e-6 rad over 0.1 s (the
+    // midpoint rule had 2.6e-5 rad, 2.3e-4 m/s, 2.2e-5 m).
+    EXPECT_LT(max_r, 1e-6);
+    EXPECT_LT(max_v, 1e-5);
+    EXPECT_LT(max_p, 1e-6);
   }
 }
 

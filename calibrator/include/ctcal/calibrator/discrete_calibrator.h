@@ -1,0 +1,58 @@
+// The discrete-time calibrator (`ctcal calibrate --method discrete`): the MVIS report's
+// interpolated formulation (sections 1-3, appendices A-B) on the same data, priors, stages and
+// outputs as the spline method (spline_calibrator.h), for cross-checking it (docs/discrete.md).
+//
+// States: the base IMU's (q, p, v, b_g, b_a) at keyframes; per auxiliary IMU its velocity
+// (--aux-velocity state) and biases per keyframe; per auxiliary gyroscope its bias per keyframe;
+// the calibration blocks of CalibrationState; gravity. Residuals: base IMU preintegration between
+// keyframes (re-integrated with the current intrinsics, eq. 37, when they are estimated;
+// bias-linearised, eq. 36, otherwise), bias random walks, auxiliary IMU / gyroscope
+// preintegration tied to the interpolated base pose (eq. 38-39, 44), corners reprojected from the
+// interpolated base pose (A.1 near a keyframe, A.2 otherwise), the rig's priors.
+//
+// Keyframes: every camera's frame times on the base clock (the cameras run at independent phases,
+// so a corner far from every keyframe would need A.2, whose error is millimetres at 20 Hz on
+// aggressive motion), merged when closer than `merge_s`, with extra keyframes in gaps longer than
+// `max_gap_s`; or a fixed rate.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "ctcal/calibrator/spline_calibrator.h"
+
+namespace ctcal {
+
+enum class AuxVelocityModel { kState, kRigid };
+
+struct DiscreteCalibratorOptions {
+  AuxVelocityModel aux_velocity = AuxVelocityModel::kState;
+  double keyframe_rate_hz = 0.0;  // 0: the camera frame times
+  double merge_s = 0.002;         // camera frames closer than this share a keyframe
+  double max_gap_s = 0.1;         // longer gaps between keyframes get keyframes in between
+  // A corner within this time of its nearest keyframe uses A.1, else A.2.
+  double kinematic_window_s = 0.01;
+  int threads = 0;
+  int max_iterations = 50;
+  double huber_threshold = 3.0;
+  double outlier_probability = 0.999;
+  int min_corners_per_view = 8;
+  int min_views = 10;
+  int max_rebuild_rounds = 3;
+  bool compute_covariance = true;
+};
+
+// The spline result's fields (result rig, outliers, timings, warnings) plus the keyframe count;
+// knot_spacing_s / num_knots are those of the initial trajectory spline.
+struct DiscreteCalibrationResult : SplineCalibrationResult {
+  int num_keyframes = 0;
+};
+
+// Throws CalibrationInputError naming the sensor for data it cannot use, CalibrationFailure for a
+// diverging solve.
+DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
+                                            const std::map<std::string, SensorData>& data,
+                                            const DiscreteCalibratorOptions& options,
+                                            const CalibrationLog& log);
+
+}  // namespace ctcal
