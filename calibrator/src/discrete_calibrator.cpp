@@ -246,8 +246,24 @@ class DiscreteProblem {
 
   void Finish(SplineCalibrationResult* out) {
     // Corner statistics: FinishResult's (2-residual blocks); the preintegration factors' below.
-    spline_internal::FinishResult(*problem_, state_, prior_ids_, corner_ids_, {}, spline_options_,
-                                  log_, out);
+    // Every corner is its own 2-residual block here: evaluate them one by one.
+    std::vector<spline_internal::CornerResiduals> corners;
+    for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
+      const PreparedCamera& cam = prep_.cameras[c];
+      spline_internal::CornerResiduals rc;
+      rc.camera = cam.state->name();
+      const auto& ids = corner_ids_[c].second;
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        Eigen::Vector2d e;
+        if (!problem_->EvaluateResidualBlock(ids[i], false, nullptr, e.data(), nullptr))
+          continue;
+        rc.whitened.push_back(e);
+        rc.sigma_px.push_back(cam.corners[corner_index_[c][i]].sigma_px);
+      }
+      corners.push_back(std::move(rc));
+    }
+    spline_internal::FinishResult(*problem_, state_, prior_ids_, corners, {}, spline_options_, log_,
+                                  out);
     for (const auto& [name, ids] : inertial_ids_) {
       const SensorState* s = state_.Find(name);
       const bool imu = s->config.type == SensorType::kImu;
