@@ -302,13 +302,24 @@ class SplineProblem {
     }
   }
 
-  // How many residuals' segments the current time offsets would change.
+  // How many residuals the current time offsets have moved out of their segment by more than
+  // kRebucketTolerance of a knot interval. A residual just past its segment's end evaluates that
+  // segment's polynomial a little beyond it, which differs from the next segment only by the
+  // jump of the spline's (N-1)-th derivative times (eps dt)^(N-1) / (N-1)!: at eps = 0.02 that is
+  // ~1e-6 of one knot interval's change of that derivative, far below any sensor's noise, so only
+  // real moves pay for a rebuild and re-solve.
   int CountRebucket() const {
+    constexpr double kRebucketTolerance = 0.02;
     int changed = 0;
     std::size_t i = 0;
-    ForEachSegment([&](int segment) {
-      if (i >= segments_.size() || segments_[i] != segment)
+    ForEachSegment([&](double coordinate) {
+      if (i >= segments_.size()) {
         ++changed;
+      } else if (segments_[i] != ClampSegment(coordinate)) {
+        const double u = coordinate - segments_[i];
+        if (u < -kRebucketTolerance || u > 1.0 + kRebucketTolerance)
+          ++changed;
+      }
       ++i;
     });
     return changed;
@@ -360,10 +371,18 @@ class SplineProblem {
   // The segment of base-clock time t_ns + shift_s (clamped: a sample moved slightly off the
   // trajectory's ends by its time offset extrapolates its end segment).
   int SegmentOf(std::int64_t t_ns, double shift_s) const {
+    return ClampSegment(SegmentCoordinate(t_ns, shift_s));
+  }
+
+  // Base-clock time t_ns + shift_s in knot intervals from the spline's start.
+  double SegmentCoordinate(std::int64_t t_ns, double shift_s) const {
     const KnotTiming& tm = spline_.timing();
-    const double s = (1e-9 * static_cast<double>(t_ns - tm.t0_ns) + shift_s) / tm.dt_s();
+    return (1e-9 * static_cast<double>(t_ns - tm.t0_ns) + shift_s) / tm.dt_s();
+  }
+
+  int ClampSegment(double coordinate) const {
     const int last = spline_.NumSegments() - 1;
-    return std::min(std::max(static_cast<int>(std::floor(s)), 0), last);
+    return std::min(std::max(static_cast<int>(std::floor(coordinate)), 0), last);
   }
 
   static int BiasSegmentOf(const BiasSpline& b, std::int64_t t_ns) {
@@ -421,7 +440,8 @@ class SplineProblem {
     return false;
   }
 
-  // Visits the trajectory segment of every residual in the order Build adds them.
+  // Visits the segment coordinate (SegmentCoordinate) of every residual in the order Build adds
+  // them.
   template <class F>
   void ForEachSegment(F&& f) const {
     for (const PreparedCamera& cam : prep_.cameras) {
@@ -429,22 +449,22 @@ class SplineProblem {
       if (Compressed(cam)) {
         ForEachFrame(cam, [&](std::size_t first, std::size_t last) {
           if (AnyLeft(cam, first, last))
-            f(SegmentOf(cam.stamps[first], s.time_offset));
+            f(SegmentCoordinate(cam.stamps[first], s.time_offset));
         });
         continue;
       }
       for (std::size_t i = 0; i < cam.corners.size(); ++i) {
         if (cam.removed[i])
           continue;
-        f(SegmentOf(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay));
+        f(SegmentCoordinate(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay));
       }
     }
     for (const PreparedInertial& in : prep_.inertial) {
       const double shift = in.state->is_base ? 0.0 : in.state->time_offset;
       for (const ImuSample& z : in.imu)
-        f(SegmentOf(z.t_ns, shift));
+        f(SegmentCoordinate(z.t_ns, shift));
       for (const GyroSample& z : in.gyro)
-        f(SegmentOf(z.t_ns, shift));
+        f(SegmentCoordinate(z.t_ns, shift));
     }
   }
 
