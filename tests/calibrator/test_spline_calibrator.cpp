@@ -155,6 +155,23 @@ TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
   EXPECT_NE(what.find("do not overlap"), std::string::npos) << what;
 }
 
+// A stated noise so small that the whitened cost overflows: the solve must stop with one
+// CalibrationFailure saying it diverged (the iteration callback aborts on a non-finite cost),
+// never a crash, a hang or a result.
+TEST(SplineCalibrator, DivergingSolveFailsWithOneMessage) {
+  Loaded l = Load(SimulatedData(12, 4.0));
+  l.rig.Find(l.rig.base_imu)->noise.gyroscope_noise_density = 1e-200;
+  SplineCalibratorOptions options;
+  options.coarse_init.policy = GuessPolicy::kOff;
+  std::string what;
+  try {
+    CalibrateSpline(l.rig, l.data, options, Quiet());
+  } catch (const CalibrationFailure& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("diverged"), std::string::npos) << what;
+}
+
 TEST(SplineCalibrator, CliWritesResultAndKalibrFiles) {
   const std::string data = SimulatedData(12, 4.0);
   const std::string out = ::testing::TempDir() + "/ctcal_spline_cli_out";
