@@ -74,12 +74,15 @@ void WriteResult(const SplineCalibrationResult& result, const std::string& dir,
 }
 
 // --method discrete | both (docs/discrete.md): `both` writes OUT/spline/, OUT/discrete/ and
-// OUT/crosscheck.yaml. Returns the exit code.
+// OUT/crosscheck.yaml. Every result folder gets its report; with `both` each folder also keeps a
+// copy of crosscheck.yaml, so that its report (and `ctcal report --out OUT/spline`) shows the
+// cross-check table. Returns the exit code.
 int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConfig& rig,
                       const std::map<std::string, SensorData>& data,
                       const SplineCalibratorOptions& spline_options,
                       const DiscreteCalibratorOptions& discrete_options, const std::string& out_dir,
-                      const CalibrationLog& log, std::ofstream& log_file) {
+                      const CalibrationLog& log, std::ofstream& log_file,
+                      const report::RunInfo& run_info) {
   SplineCalibrationResult spline;
   DiscreteCalibrationResult discrete;
   try {
@@ -99,6 +102,7 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
   try {
     if (method == "discrete") {
       WriteResult(discrete, out_dir, log);
+      WriteCalibrationReport(out_dir, std::move(discrete.report_data), run_info, log);
       return kExitOk;
     }
     WriteResult(spline, out_dir + "/spline", log);
@@ -109,6 +113,11 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
     log("cross-check (discrete - spline; flagged: |difference| > the smaller sigma)");
     log(FormatCrossCheck(check));
     log("wrote " + out_dir + "/crosscheck.yaml");
+    for (const char* sub : {"/spline", "/discrete"})
+      std::filesystem::copy_file(out_dir + "/crosscheck.yaml", out_dir + sub + "/crosscheck.yaml",
+                                 std::filesystem::copy_options::overwrite_existing);
+    WriteCalibrationReport(out_dir + "/spline", std::move(spline.report_data), run_info, log);
+    WriteCalibrationReport(out_dir + "/discrete", std::move(discrete.report_data), run_info, log);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
@@ -230,7 +239,7 @@ int RunCalibrate(int argc, char** argv) {
     discrete_options.threads = options.threads;
     discrete_options.max_iterations = options.max_iterations;
     return RunDiscreteOrBoth(cli, method, rig, data, options, discrete_options, out_dir, log,
-                             log_file);
+                             log_file, run_info);
   }
 
   SplineCalibrationResult result;

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "ctcal/sensors/compare.h"
@@ -37,8 +39,20 @@ TEST(CalibrateMethods, BothWritesTwoHonestResultsAndTheCrossCheck) {
   ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << out << ".log";
   for (const char* f : {"spline/result.yaml", "spline/camchain-imucam.yaml", "spline/imu.yaml",
                         "discrete/result.yaml", "discrete/camchain-imucam.yaml",
-                        "discrete/imu.yaml", "crosscheck.yaml", "log.txt"})
+                        "discrete/imu.yaml", "crosscheck.yaml", "log.txt", "spline/report.html",
+                        "spline/report.pdf", "discrete/report.html", "discrete/report.pdf"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  // Each report shows the cross-check as a table (the section is not omitted).
+  for (const char* sub : {"/spline", "/discrete"}) {
+    std::ifstream html(out + sub + "/report.html");
+    const std::string text((std::istreambuf_iterator<char>(html)),
+                           std::istreambuf_iterator<char>());
+    const std::size_t at = text.find("id=\"sec-crosscheck\"");
+    ASSERT_NE(at, std::string::npos) << sub;
+    const std::size_t end = text.find("</section>", at);
+    const std::string section = text.substr(at, end == std::string::npos ? end : end - at);
+    EXPECT_NE(section.find("<table"), std::string::npos) << sub << ": " << section.substr(0, 300);
+  }
 
   std::vector<std::string> warnings;
   const RigConfig truth = LoadRig(data + "/truth.yaml", &warnings);
