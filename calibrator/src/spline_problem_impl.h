@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -275,8 +276,51 @@ class SplineProblem {
     ceres::Solve(so, problem_.get(), &summary);
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +
-                               "): check the initial guesses and the noise settings");
+                               "): " + DivergenceCulprit() +
+                               ": check its initial guesses and noise settings");
     return summary;
+  }
+
+  // Names the sensor a failed solve points at: the first whose whitened residuals are not finite
+  // at the current values, else the one with the largest share of the cost.
+  std::string DivergenceCulprit() {
+    std::vector<std::pair<std::string, double>> cost;  // sum of squared whitened residuals
+    for (const PreparedCamera& cam : prep_.cameras) {
+      double sum = 0.0;
+      for (std::size_t i = 0; i < cam.corners.size(); ++i) {
+        Eigen::Vector2d e;
+        if (cam.removed[i])
+          continue;
+        sum +=
+            EvaluateCorner(cam, i, &e) ? e.squaredNorm() : std::numeric_limits<double>::infinity();
+      }
+      cost.emplace_back(cam.state->name(), sum);
+    }
+    for (const auto& [name, ids] : inertial_ids_) {
+      double sum = 0.0;
+      for (const ceres::ResidualBlockId id : ids) {
+        double c = 0.0;
+        sum += problem_->EvaluateResidualBlock(id, false, &c, nullptr, nullptr)
+                   ? 2.0 * c
+                   : std::numeric_limits<double>::infinity();
+      }
+      cost.emplace_back(name, sum);
+    }
+    double total = 0.0;
+    const std::pair<std::string, double>* largest = nullptr;
+    for (const auto& c : cost) {
+      if (!std::isfinite(c.second))
+        return "the whitened residuals of sensors." + c.first + " are not finite";
+      total += c.second;
+      if (largest == nullptr || c.second > largest->second)
+        largest = &c;
+    }
+    if (largest == nullptr)
+      return "no residual to blame";
+    char share[64];
+    std::snprintf(share, sizeof share, "%.0f %%",
+                  100.0 * largest->second / std::max(total, 1e-300));
+    return "sensors." + largest->first + " holds the largest share of the cost (" + share + ")";
   }
 
   // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.

@@ -156,8 +156,8 @@ TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
 }
 
 // A stated noise so small that the whitened cost overflows: the solve must stop with one
-// CalibrationFailure saying it diverged (the iteration callback aborts on a non-finite cost),
-// never a crash, a hang or a result.
+// CalibrationFailure saying it diverged (the iteration callback aborts on a non-finite cost) and
+// naming the sensor whose residuals overflow, never a crash, a hang or a result.
 TEST(SplineCalibrator, DivergingSolveFailsWithOneMessage) {
   Loaded l = Load(SimulatedData(12, 4.0));
   l.rig.Find(l.rig.base_imu)->noise.gyroscope_noise_density = 1e-200;
@@ -170,6 +170,7 @@ TEST(SplineCalibrator, DivergingSolveFailsWithOneMessage) {
     what = e.what();
   }
   EXPECT_NE(what.find("diverged"), std::string::npos) << what;
+  EXPECT_NE(what.find("sensors." + l.rig.base_imu), std::string::npos) << what;
 }
 
 TEST(SplineCalibrator, CliWritesResultAndKalibrFiles) {
