@@ -254,21 +254,10 @@ int RunCalibrate(int argc, char** argv) {
   }
 
   try {
-    SaveRig(result.result, out_dir + "/result.yaml");
-    SaveKalibrFiles(result.result, out_dir);
+    WriteResult(result, out_dir, log);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
-  log("");
-  log(FormatParameterTable(result.result));
-  char line[200];
-  std::snprintf(line, sizeof line,
-                "done: %d iterations, %.2f s solving (%.3f s per iteration), %.2f s covariance, "
-                "%.2f s total",
-                result.iterations, result.solve_seconds, result.seconds_per_iteration,
-                result.covariance_seconds, result.total_seconds);
-  log(line);
-  log("wrote " + out_dir + "/result.yaml, camchain-imucam.yaml, imu.yaml, log.txt");
   run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
   run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
   WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
