@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -73,6 +74,22 @@ void WriteResult(const SplineCalibrationResult& result, const std::string& dir,
   log("wrote " + dir + "/result.yaml, camchain-imucam.yaml, imu.yaml");
 }
 
+// Runs a calibration; bad input exits with the input-error code, any other failure with the
+// run-failed code, each logged to OUT/log.txt. Returns std::nullopt when `calibrate` succeeded.
+template <class F>
+std::optional<int> Guarded(CommandLine& cli, std::ofstream& log_file, F&& calibrate) {
+  try {
+    calibrate();
+  } catch (const CalibrationInputError& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.InputError(e.what());
+  } catch (const std::exception& e) {
+    log_file << "error: " << e.what() << '\n';
+    return cli.RunFailed(e.what());
+  }
+  return std::nullopt;
+}
+
 // --method discrete | both (docs/discrete.md): `both` writes OUT/spline/, OUT/discrete/ and
 // OUT/crosscheck.yaml. Every result folder gets its report; with `both` each folder also keeps a
 // copy of crosscheck.yaml, so that its report (and `ctcal report --out OUT/spline`) shows the
@@ -85,20 +102,15 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
                       const report::RunInfo& run_info) {
   SplineCalibrationResult spline;
   DiscreteCalibrationResult discrete;
-  try {
-    if (method == "both") {
-      log("=== spline ===");
-      spline = CalibrateSpline(rig, data, spline_options, log);
-      log("=== discrete ===");
-    }
-    discrete = CalibrateDiscrete(rig, data, discrete_options, log);
-  } catch (const CalibrationInputError& e) {
-    log_file << "error: " << e.what() << '\n';
-    return cli.InputError(e.what());
-  } catch (const std::exception& e) {
-    log_file << "error: " << e.what() << '\n';
-    return cli.RunFailed(e.what());
-  }
+  if (const auto failed = Guarded(cli, log_file, [&] {
+        if (method == "both") {
+          log("=== spline ===");
+          spline = CalibrateSpline(rig, data, spline_options, log);
+          log("=== discrete ===");
+        }
+        discrete = CalibrateDiscrete(rig, data, discrete_options, log);
+      }))
+    return *failed;
   try {
     if (method == "discrete") {
       WriteResult(discrete, out_dir, log);
@@ -243,15 +255,9 @@ int RunCalibrate(int argc, char** argv) {
   }
 
   SplineCalibrationResult result;
-  try {
-    result = CalibrateSpline(rig, data, options, log);
-  } catch (const CalibrationInputError& e) {
-    log_file << "error: " << e.what() << '\n';
-    return cli.InputError(e.what());
-  } catch (const std::exception& e) {
-    log_file << "error: " << e.what() << '\n';
-    return cli.RunFailed(e.what());
-  }
+  if (const auto failed =
+          Guarded(cli, log_file, [&] { result = CalibrateSpline(rig, data, options, log); }))
+    return *failed;
 
   try {
     WriteResult(result, out_dir, log);
