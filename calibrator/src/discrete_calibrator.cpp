@@ -621,14 +621,7 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   dp.Build(true);
   solve("[4/6] robust solve (Huber on the corners)");
   dp.RemoveOutliers(&out.outliers);
-  for (const CameraOutliers& o : out.outliers) {
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "  %s: %d views, %d corners, %d outliers removed (chi-square %.1f %% gate)",
-                  o.camera.c_str(), o.views, o.corners, o.removed,
-                  100.0 * options.outlier_probability);
-    log(line);
-  }
+  spline_internal::LogOutliers(out.outliers, options.outlier_probability, log);
   dp.Build(false);
   ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
   for (int round = 0; round < options.max_rebuild_rounds; ++round) {

@@ -267,6 +267,19 @@ Eigen::Vector3d GravitySigma(const double* g, const Eigen::Matrix2d& cov_tangent
 
 namespace spline_internal {
 
+void LogOutliers(const std::vector<CameraOutliers>& outliers, double outlier_probability,
+                 const CalibrationLog& log) {
+  for (const CameraOutliers& o : outliers) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "  %s: %d views, %d corners, %d outliers removed (chi-square %.1f %% gate), %d "
+                  "not projectable at the guess",
+                  o.camera.c_str(), o.views, o.corners, o.removed, 100.0 * outlier_probability,
+                  o.invalid);
+    log(line);
+  }
+}
+
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback) {
   ceres::Solver::Options so;

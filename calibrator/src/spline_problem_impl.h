@@ -96,6 +96,11 @@ std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
 
 // The marginal covariance and residual statistics, written into the result rig
 // (spline_calibrator.cpp).
+// One log line per camera: views, corners, outliers removed by the chi-square gate, corners not
+// projectable at the guess (shared by the spline and the discrete pipelines).
+void LogOutliers(const std::vector<CameraOutliers>& outliers, double outlier_probability,
+                 const CalibrationLog& log);
+
 void FinishResult(
     ceres::Problem& problem, CalibrationState& state,
     const std::vector<ceres::ResidualBlockId>& prior_ids,
@@ -860,15 +865,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   sp.Build(true);
   solve("[4/6] robust solve (Huber on the corners)");
   sp.RemoveOutliers(options.outlier_probability, &out->outliers);
-  for (const CameraOutliers& o : out->outliers) {
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "  %s: %d views, %d corners, %d outliers removed (chi-square %.1f %% gate), %d "
-                  "not projectable at the guess",
-                  o.camera.c_str(), o.views, o.corners, o.removed,
-                  100.0 * options.outlier_probability, o.invalid);
-    log(line);
-  }
+  LogOutliers(out->outliers, options.outlier_probability, log);
   sp.Build(false);
   ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
   for (int round = 0; round < options.max_rebucket_rounds; ++round) {
