@@ -26,7 +26,9 @@
 // Writes DIR/runs.csv (run, seed, parameter, truth, estimate, error, sigma), DIR/summary.yaml
 // (per parameter mean error, RMS error, mean sigma; NEES per group and overall, bands, inside),
 // DIR/plots/<sensor>.<key>.png (error and +-3 sigma per run, one panel per component, as the
-// reports' Figs. 2-4) and DIR/logs/seed_<K>.txt (each calibration's log).
+// reports' Figs. 2-4) and DIR/logs/seed_<K>.txt (each calibration's log). runs.csv and
+// summary.yaml are rewritten after every finished run (`finished:` counts them), the plots at the
+// end.
 #include <ceres/sphere_manifold.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -317,7 +319,7 @@ bool WriteSummary(const Settings& s, const std::vector<RunRecord>& runs, const f
   if (s.method == "discrete")
     f << "\naux_velocity: " << (s.aux_velocity.empty() ? "state" : s.aux_velocity);
   f << "\nduration: " << Num(s.duration) << "\nseed0: " << s.seed0 << "\nruns: " << s.runs
-    << "\nsucceeded: " << ok << "\n";
+    << "\nfinished: " << runs.size() << "\nsucceeded: " << ok << "\n";
   f << "failed:\n";
   for (const RunRecord& r : runs)
     if (!r.ok)
@@ -531,6 +533,7 @@ int RunMonteCarlo(int argc, char** argv) {
   std::atomic<int> next{0};
   std::mutex print;
   int done = 0;
+  std::vector<int> finished;  // runs done, guarded by `print`
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) {
     pool.emplace_back([&] {
@@ -554,6 +557,19 @@ int RunMonteCarlo(int argc, char** argv) {
         }
         std::fflush(stdout);
         runs[static_cast<std::size_t>(k)] = std::move(r);
+        finished.push_back(k);
+        // The files so far after every run: a long study can be read (or stopped) before its end.
+        std::sort(finished.begin(), finished.end());
+        std::vector<RunRecord> so_far;
+        for (const int i : finished)
+          so_far.push_back(runs[static_cast<std::size_t>(i)]);
+        try {
+          std::vector<std::string> ignored;
+          WriteRunsCsv(so_far, fs::path(out) / "runs.csv");
+          WriteSummary(s, so_far, fs::path(out) / "summary.yaml", &ignored);
+        } catch (const std::exception& e) {
+          std::printf("  warning: %s\n", e.what());
+        }
       }
     });
   }

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "ctcal/calibrator/discrete/discrete_residuals.h"
+#include "ctcal/calibrator/observability/motion_prediction.h"
 #include "spline_problem_impl.h"
 
 namespace ctcal {
@@ -645,6 +646,7 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   log("[6/6] covariance and residuals");
   const auto t_cov = Clock::now();
   dp.Finish(&out);
+  CompleteObservability(rig, data, &out.result, log, &out.warnings);
   out.covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
   out.total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   if (out.result.solver)

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "ctcal/calibrator/observability/motion_prediction.h"
+#include "ctcal/calibrator/observability/numeric_observability.h"
 #include "ctcal/sensors/parameter_names.h"
 
 namespace ctcal {
@@ -189,6 +190,16 @@ void AnalyseMotion(const RigConfig& rig, const std::map<std::string, SensorData>
   observability->motion = whole;
   observability->motion.insert(observability->motion.end(), segments.begin(), segments.end());
   observability->predicted_unobservable = PredictUnobservable(rig, whole);
+}
+
+void CompleteObservability(const RigConfig& rig, const std::map<std::string, SensorData>& data,
+                           RigConfig* result, const std::function<void(const std::string&)>& log,
+                           std::vector<std::string>* warnings) {
+  if (!result->observability)
+    return;
+  AnalyseMotion(rig, data, MotionOptions{}, &*result->observability);
+  MergePredictedWeakIntoUnobservable(&*result->observability, result);
+  ReportObservability(*result, *result->observability, log, warnings);
 }
 
 }  // namespace ctcal

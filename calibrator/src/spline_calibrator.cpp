@@ -429,7 +429,7 @@ void FinishResult(
   for (std::size_t i = 0; i < undetermined.size(); ++i)
     undetermined[i] = cov.undetermined[i] || cov_data.undetermined[i];
   // Observability of the data alone (numeric_observability.h); the motion half is added by
-  // CalibrateSpline, which has the raw data.
+  // the calibrator (CompleteObservability), which has the raw data.
   const double duration_s = (out->num_knots - options.order + 1) * out->knot_spacing_s;
   result.observability = NumericObservability(info_data, cov_data, result, duration_s);
   out->covariance_names = info.names;
@@ -511,11 +511,7 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
             : RunPipeline<6, Se3Representation::kJoint>(&prep, options, log, &out);
       break;
   }
-  if (out.result.observability) {
-    AnalyseMotion(rig, data, MotionOptions{}, &*out.result.observability);
-    MergePredictedWeakIntoUnobservable(&*out.result.observability, &out.result);
-    ReportObservability(out.result, *out.result.observability, log, &out.warnings);
-  }
+  CompleteObservability(rig, data, &out.result, log, &out.warnings);
   out.total_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   if (out.result.solver)

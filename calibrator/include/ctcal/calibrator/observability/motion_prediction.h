@@ -18,6 +18,7 @@
 // estimate are not listed.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -47,5 +48,14 @@ InertialSeries MakeInertialSeries(const RigConfig& rig, const SensorConfig& sens
 // in `data`. A camera-only rig gets no primitives (no inertial readings).
 void AnalyseMotion(const RigConfig& rig, const std::map<std::string, SensorData>& data,
                    const MotionOptions& options, Observability* observability);
+
+// The rest of every calibration's observability report once its numeric half is in
+// result->observability (the calibrators' FinishResult): AnalyseMotion on the raw data, the
+// noise-broken predicted parameters moved from weak to unobservable
+// (MergePredictedWeakIntoUnobservable) and the terminal block with its warnings
+// (ReportObservability). Does nothing when there is no numeric half (covariance not computed).
+void CompleteObservability(const RigConfig& rig, const std::map<std::string, SensorData>& data,
+                           RigConfig* result, const std::function<void(const std::string&)>& log,
+                           std::vector<std::string>* warnings);
 
 }  // namespace ctcal
