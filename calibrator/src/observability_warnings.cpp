@@ -30,12 +30,14 @@ int KeySize(const RigConfig& rig, const SensorConfig& s, const std::string& key)
 }  // namespace
 
 std::string MotionSuggestion(const RigConfig& rig, const std::string& parameter) {
+  // Gravity is listed as `gravity_W` (its direction's two tangent dimensions), a name
+  // FindParameter does not know (it has gravity_W[0..2]).
   const auto p = FindParameter(rig, parameter);
-  if (!p)
-    return "excite the motion on every axis";
-  if (p->sensor.empty())
+  if (parameter.rfind("gravity_W", 0) == 0 || (p && p->sensor.empty()))
     return "tilt the rig through several orientations so gravity is seen from different "
            "directions";
+  if (!p)
+    return "excite the motion on every axis";
   const SensorConfig& s = *rig.Find(p->sensor);
   const std::string& k = p->key;
   const std::string base = rig.base_imu;

@@ -13,6 +13,8 @@
 #include <set>
 #include <string>
 
+#include "ctcal/calibrator/discrete_calibrator.h"
+#include "ctcal/calibrator/observability/motion_primitives.h"
 #include "ctcal/calibrator/observability/numeric_observability.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/parameter_names.h"
@@ -31,10 +33,14 @@ struct Calibration {
   double duration_s = 0.0;  // the trajectory's, as the calibrator scales the reference
 };
 
-// Simulated (in memory) and calibrated once per scenario and process.
-const Calibration& Calibrated(const std::string& scenario, double duration, std::uint64_t seed) {
+enum class Method { kSpline, kDiscrete };
+
+// Simulated (in memory) and calibrated once per scenario, method and process.
+const Calibration& Calibrated(const std::string& scenario, double duration, std::uint64_t seed,
+                              Method method = Method::kSpline) {
   static std::map<std::string, Calibration> cache;
-  const auto it = cache.find(scenario);
+  const std::string key = scenario + (method == Method::kDiscrete ? "/discrete" : "/spline");
+  const auto it = cache.find(key);
   if (it != cache.end())
     return it->second;
   const RigConfig rig = sim::DefaultRig();
@@ -50,9 +56,17 @@ const Calibration& Calibrated(const std::string& scenario, double duration, std:
   calib.threads = 2;
   Calibration r;
   r.truth = data.truth;
-  r.out = CalibrateSpline(guess, sim::ToSensorData(data), calib, [](const std::string&) {});
+  const auto quiet = [](const std::string&) {};
+  if (method == Method::kDiscrete) {
+    DiscreteCalibratorOptions discrete;
+    discrete.threads = 2;
+    r.out = CalibrateDiscrete(guess, sim::ToSensorData(data), discrete, quiet);
+  } else {
+    r.out = CalibrateSpline(guess, sim::ToSensorData(data), calib, quiet);
+  }
+  // The initial trajectory spline's span for both methods (the one the calibrators scale by).
   r.duration_s = (r.out.num_knots - calib.order + 1) * r.out.knot_spacing_s;
-  return cache.emplace(scenario, std::move(r)).first->second;
+  return cache.emplace(key, std::move(r)).first->second;
 }
 
 const Observability& Obs(const Calibration& r) {
@@ -135,6 +149,49 @@ void ExpectPredictedIsNumeric(const Calibration& r) {
   std::printf("%s\n", Describe(Obs(r)).c_str());
 }
 
+// "Finishes with sigmas that say so": a result with a solver summary, and every parameter it
+// reports unobservable carries sigma .inf; every weak one a finite sigma beyond kWeakFactor x
+// the fully excited rig's.
+void ExpectFinishedWithHonestSigmas(const Calibration& r) {
+  EXPECT_TRUE(r.out.result.solver.has_value());
+  for (const std::string& n : Obs(r).unobservable) {
+    if (n == "gravity_W")
+      continue;
+    const auto s = SigmaOf(r, n);
+    EXPECT_TRUE(s && std::isinf(*s)) << n << " is unobservable but has a finite sigma";
+  }
+  for (const std::string& n : Obs(r).weak) {
+    const auto s = SigmaOf(r, n);
+    EXPECT_TRUE(s && std::isfinite(*s)) << n;
+  }
+}
+
+// Each unobservable (numeric or predicted) or weak parameter has exactly one warning that names
+// it, says which, and suggests a motion specific to its kind (not the generic fallback) or to stop
+// estimating it.
+void ExpectOneWarningPerParameter(const Calibration& r) {
+  std::set<std::string> names(Obs(r).unobservable.begin(), Obs(r).unobservable.end());
+  names.insert(Obs(r).predicted_unobservable.begin(), Obs(r).predicted_unobservable.end());
+  names.insert(Obs(r).weak.begin(), Obs(r).weak.end());
+  for (const std::string& n : names) {
+    int count = 0;
+    for (const std::string& w : r.out.warnings) {
+      if (w.rfind("warning: " + n + ": ", 0) != 0)
+        continue;
+      ++count;
+      const bool weak_only =
+          std::find(Obs(r).weak.begin(), Obs(r).weak.end(), n) != Obs(r).weak.end() &&
+          w.find("unobservable") == std::string::npos;
+      EXPECT_TRUE(weak_only || w.find(": unobservable (") != std::string::npos) << w;
+      EXPECT_EQ(w.find("excite the motion on every axis"), std::string::npos) << w;
+      if (n != "gravity_W") {
+        EXPECT_NE(w.find(", or remove `"), std::string::npos) << w;
+      }
+    }
+    EXPECT_EQ(count, 1) << n;
+  }
+}
+
 TEST(ObservabilityCalibration, YawLeavesTheVerticalUndetermined) {
   const Calibration& r = Calibrated("yaw", 6.0, 21);
   const RigConfig& rig = r.out.result;
@@ -155,6 +212,8 @@ TEST(ObservabilityCalibration, YawLeavesTheVerticalUndetermined) {
                              "gyro0.time_offset", "cam0.intrinsics[2]", "cam0.intrinsics[3]"},
                             All(rig, "imu0.Tg")}));
   ExpectPredictedIsNumeric(r);
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
   // Each null direction names what it moves; the gauge about z moves the rotations about z.
   ASSERT_FALSE(Obs(r).directions.empty());
   for (const ObservabilityDirection& d : Obs(r).directions) {
@@ -180,6 +239,8 @@ TEST(ObservabilityCalibration, NoRotationLeavesLeverArmsAndGyroscopesUndetermine
                             All(rig, "cam0.intrinsics"),
                             {"imu1.time_offset", "cam0.time_offset", "cam1.time_offset"}}));
   ExpectPredictedIsNumeric(r);
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
 }
 
 TEST(ObservabilityCalibration, ConstantSpecificForceAlongXLeavesItsColumnsUndetermined) {
@@ -198,6 +259,77 @@ TEST(ObservabilityCalibration, ConstantSpecificForceAlongXLeavesItsColumnsUndete
                             All(rig, "cam0.t_B_S"),
                             {"imu0.Da[2]", "imu0.Da[5]", "imu1.Da[0]", "imu0.Tg[1]"}}));
   ExpectPredictedIsNumeric(r);
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
+}
+
+TEST(ObservabilityCalibration, PlanarAddsTheZColumnsOfTheAccelerometers) {
+  const Calibration& r = Calibrated("planar", 6.0, 25);
+  const RigConfig& rig = r.out.result;
+  SCOPED_TRACE(Describe(Obs(r)));
+  // The yaw set (one-axis rotation about z_B) ...
+  ExpectUnobservable(
+      r, {"imu0.Dw[0]", "imu0.Dw[1]", "imu0.Dw[2]", "imu1.Dw[0]", "imu1.Dw[1]", "imu1.Dw[2]",
+          "cam0.t_B_S[2]", "cam1.t_B_S[2]", "imu1.t_B_S[2]", "gyro0.R_B_S[2]"});
+  // ... and, the specific force along z being g throughout (constant height), the z columns of
+  // D_a and T_g of both IMUs, absorbed by the biases (docs/observability.md, `planar`).
+  ExpectUnobservable(r, {"imu0.Da[3]", "imu0.Da[4]", "imu0.Da[5]", "imu0.Tg[2]", "imu0.Tg[5]",
+                         "imu0.Tg[8]", "imu1.Da[3]", "imu1.Da[4]", "imu1.Da[5]"});
+  ExpectUnobservableOrWeak(r, {"imu0.R_I_a[2]", "imu1.R_B_S[2]", "cam0.R_B_S[2]"});
+  // Excited: the rate about z (D_w's column z), the horizontal specific force (D_a's columns x,
+  // y), and the clocks through the varying rate and horizontal acceleration.
+  ExpectObservable(
+      r, {"imu0.Dw[5]", "imu1.Dw[5]", "imu0.Da[0]", "imu0.Da[2]", "imu1.Da[0]", "imu1.time_offset",
+          "cam0.time_offset", "cam1.time_offset", "gyro0.time_offset"});
+  ExpectPredictedIsNumeric(r);
+  // The motion analysis finds the plane: planar about the base's z.
+  bool planar = false;
+  for (const MotionPrimitive& m : Obs(r).motion)
+    planar = planar || (m.sensor == rig.base_imu && m.primitive == kPlanar && m.axis.z() > 0.99);
+  EXPECT_TRUE(planar);
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
+}
+
+TEST(ObservabilityCalibration, StaticLeavesEveryInertialParameterUndetermined) {
+  const Calibration& r = Calibrated("static", 4.0, 26);
+  const RigConfig& rig = r.out.result;
+  SCOPED_TRACE(Describe(Obs(r)));
+  // No rotation and a constant specific force on every axis: every D_w, D_a and T_g, every lever
+  // arm, and the auxiliary gyroscope's rotation and clock (docs/observability.md, `static`).
+  ExpectUnobservable(r, Join({All(rig, "imu0.Dw"),
+                              All(rig, "imu0.Da"),
+                              All(rig, "imu0.Tg"),
+                              All(rig, "imu1.Dw"),
+                              All(rig, "imu1.Da"),
+                              All(rig, "imu1.t_B_S"),
+                              All(rig, "cam0.t_B_S"),
+                              All(rig, "cam1.t_B_S"),
+                              All(rig, "gyro0.R_B_S"),
+                              {"gyro0.time_offset"}}));
+  // Nothing moves, so no clock is seen by anything.
+  ExpectUnobservableOrWeak(r, {"imu1.time_offset", "cam0.time_offset", "cam1.time_offset"});
+  ExpectPredictedIsNumeric(r);
+  // What a still rig still determines: the cameras' projection (many corners over the image of
+  // one view).
+  ExpectObservable(r, {"cam0.intrinsics[2]", "cam0.intrinsics[3]"});
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
+}
+
+// The discrete (keyframe) calibrator reports the same observability on degenerate motion: the
+// trajectory states it marginalises are keyframes instead of spline knots, the data the same.
+TEST(ObservabilityCalibration, DiscreteYawLeavesTheVerticalUndetermined) {
+  const Calibration& r = Calibrated("yaw", 3.0, 27, Method::kDiscrete);
+  SCOPED_TRACE(Describe(Obs(r)));
+  ExpectUnobservable(r, {"imu0.Dw[0]", "imu0.Dw[1]", "imu0.Dw[2]", "cam0.t_B_S[2]", "cam1.t_B_S[2]",
+                         "imu1.t_B_S[2]", "gyro0.R_B_S[2]"});
+  ExpectObservable(
+      r, {"imu0.Dw[5]", "imu0.Da[0]", "imu1.time_offset", "cam0.time_offset", "gyro0.time_offset"});
+  ExpectPredictedIsNumeric(r);
+  EXPECT_FALSE(Obs(r).motion.empty());
+  ExpectFinishedWithHonestSigmas(r);
+  ExpectOneWarningPerParameter(r);
 }
 
 TEST(ObservabilityCalibration, FullIsObservableAndMatchesTheReference) {

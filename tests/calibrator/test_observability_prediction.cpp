@@ -147,6 +147,8 @@ TEST(ObservabilityWarnings, OneLinePerParameterWithStatusAndRemedy) {
   // The column of an upper-triangular entry: Dw[4] = d23 is in column z.
   EXPECT_NE(MotionSuggestion(rig, "imu1.Dw[4]").find("imu1's z axis"), std::string::npos);
   EXPECT_NE(MotionSuggestion(rig, "imu1.Tg[4]").find("imu1's y axis"), std::string::npos);
+  // Gravity is listed by its key alone (its direction's tangent), and has its own remedy.
+  EXPECT_NE(MotionSuggestion(rig, "gravity_W").find("gravity is seen"), std::string::npos);
 }
 
 }  // namespace
