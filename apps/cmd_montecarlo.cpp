@@ -1,5 +1,6 @@
 // `ctcal montecarlo --scenario S --runs N [--method spline|discrete] [--aux-velocity state|rigid]
-//  [--duration D] [--seed0 K] [--threads T] --out DIR` (issue 9): N seeds of simulate + calibrate
+//  [--duration D] [--seed0 K] [--threads T] [--quiet-gyro SENSOR] --out DIR` (issue 9): N seeds of
+//  simulate + calibrate
 // of the default rig, in-process and in parallel, and the consistency of the reported
 // uncertainty with the actual errors.
 //
@@ -78,6 +79,9 @@ struct Settings {
   double duration = 10.0;
   std::uint64_t seed0 = 1;
   int runs = 0;
+  // Study knob: these sensors' gyroscopes are simulated without white noise while the calibrator
+  // still assumes their stated noise (isolates what an estimator does with those readings).
+  std::vector<std::string> quiet_gyros;
 };
 
 // What one calibration returns, whichever method made it.
@@ -247,7 +251,10 @@ RunRecord RunOne(const Settings& s, int run, const fs::path& log_dir) {
     sim::SimOptions options;
     options.duration = s.duration;
     options.seed = r.seed;
-    const sim::SimulatedDataset data = sim::Simulate(rig, traj, options);
+    RigConfig simulated = rig;
+    for (const std::string& name : s.quiet_gyros)
+      simulated.Find(name)->noise.gyroscope_noise_density = 0.0;
+    const sim::SimulatedDataset data = sim::Simulate(simulated, traj, options);
     sim::Random rng = sim::Random(r.seed).Fork(sim::kPerturbationStream);
     const RigConfig guess = sim::PerturbRig(rig, sim::Perturbation::kTable4, rng);
     const Calibrated c = Calibrate(s, guess, sim::ToSensorData(data), log);
@@ -318,6 +325,12 @@ bool WriteSummary(const Settings& s, const std::vector<RunRecord>& runs, const f
   f << "scenario: " << sim::ToString(s.scenario) << "\nmethod: " << s.method;
   if (s.method == "discrete")
     f << "\naux_velocity: " << (s.aux_velocity.empty() ? "state" : s.aux_velocity);
+  if (!s.quiet_gyros.empty()) {
+    f << "\nquiet_gyros: [";
+    for (std::size_t i = 0; i < s.quiet_gyros.size(); ++i)
+      f << (i ? ", " : "") << s.quiet_gyros[i];
+    f << "]";
+  }
   f << "\nduration: " << Num(s.duration) << "\nseed0: " << s.seed0 << "\nruns: " << s.runs
     << "\nfinished: " << runs.size() << "\nsucceeded: " << ok << "\n";
   f << "failed:\n";
@@ -463,7 +476,8 @@ int RunMonteCarlo(int argc, char** argv) {
   namespace po = boost::program_options;
   CommandLine cli("montecarlo",
                   "--scenario NAME --runs N --out DIR [--method spline|discrete] "
-                  "[--aux-velocity state|rigid] [--duration S] [--seed0 K] [--threads T]",
+                  "[--aux-velocity state|rigid] [--duration S] [--seed0 K] [--threads T] "
+                  "[--quiet-gyro SENSOR]",
                   "Simulate and calibrate the default rig for N seeds in parallel (table4 "
                   "guesses and priors) and test whether the reported uncertainties match the "
                   "errors: NEES per sensor and overall against chi-square bands.");
@@ -480,7 +494,10 @@ int RunMonteCarlo(int argc, char** argv) {
        "discrete method: auxiliary IMU velocity as a state or from the rigid-body model")  //
       ("duration", po::value(&s.duration)->default_value(10.0), "seconds per recording")   //
       ("seed0", po::value(&seed_text)->default_value("1"), "seed of the first run")        //
-      ("threads", po::value(&threads)->default_value(0), "parallel runs (0: every core)");
+      ("threads", po::value(&threads)->default_value(0), "parallel runs (0: every core)")  //
+      ("quiet-gyro", po::value(&s.quiet_gyros)->composing(),
+       "study: simulate this inertial sensor's gyroscope without white noise (the calibrator "
+       "still assumes its stated noise); repeatable");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   try {
@@ -510,6 +527,15 @@ int RunMonteCarlo(int argc, char** argv) {
     return cli.UsageError("--aux-velocity must be state or rigid, got " + s.aux_velocity);
   if (!s.aux_velocity.empty() && s.method != "discrete")
     return cli.UsageError("--aux-velocity applies to --method discrete only");
+  {
+    const RigConfig rig = sim::DefaultRig();
+    for (const std::string& name : s.quiet_gyros) {
+      const SensorConfig* sensor = rig.Find(name);
+      if (sensor == nullptr || !sensor->IsInertial())
+        return cli.UsageError("--quiet-gyro " + name +
+                              ": not an inertial sensor of the default rig");
+    }
+  }
 
   std::error_code ec;
   fs::create_directories(fs::path(out) / "logs", ec);

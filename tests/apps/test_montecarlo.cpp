@@ -190,6 +190,7 @@ TEST_F(MonteCarlo, BadUsageIsOneLineAndExitTwo) {
         std::string("--scenario full --runs 2 --method spline --aux-velocity rigid --out ") + dir,
         std::string("--scenario full --runs 2 --method discrete --aux-velocity fast --out ") + dir,
         std::string("--scenario full --runs 2 --duration 0.5 --out ") + dir,
+        std::string("--scenario full --runs 2 --quiet-gyro cam0 --out ") + dir,
         std::string("--scenario full --runs 2 --seed0 -3 --out ") + dir}) {
     const Result r = RunCtcal("montecarlo " + args, dir);
     EXPECT_EQ(r.code, 2) << args << ": " << r.err;
