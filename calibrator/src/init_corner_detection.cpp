@@ -62,7 +62,7 @@ std::vector<CornerObservation> DetectCameraCorners(
     const DetectionResult& r = results[i];
     if (!r.error.empty()) {
       if (s.unreadable++ == 0)
-        s.first_error = paths[i] + ": " + r.error;
+        s.first_error = r.error;  // names the file
       continue;
     }
     for (const TagRejection& rejection : r.rejected)
