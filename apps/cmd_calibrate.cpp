@@ -151,7 +151,9 @@ int RunCalibrate(int argc, char** argv) {
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
                               "rig file with initial guesses (SPEC section 7)")(
-      "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
+      "data", po::value(&data_dir)->required(),
+      "dataset folder (SPEC section 6); a camera with images but no corners.csv is detected "
+      "first, its corners written to OUT/<camera>/corners.csv")(
       "out", po::value(&out_dir)->required(), "output folder")(
       "method", po::value(&method)->default_value("spline"),
       "spline, discrete (MVIS keyframes) or both (and a cross-check)")(
