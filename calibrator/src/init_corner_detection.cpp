@@ -48,7 +48,7 @@ std::vector<CornerObservation> DetectCameraCorners(
   const std::size_t step = std::max<std::size_t>(1, images.size() / 10);
   const std::vector<DetectionResult> results =
       detector.DetectFiles(paths, [&](std::size_t done, std::size_t total) {
-        if (log && (done % step == 0 || done == total) && done < total) {
+        if (log && done % step == 0 && done < total) {
           char line[160];
           std::snprintf(line, sizeof line, "%s: %s %zu of %zu images", kStage, camera.c_str(), done,
                         total);
