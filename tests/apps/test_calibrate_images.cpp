@@ -56,22 +56,22 @@ CliRun Ctcal(const std::string& args, const fs::path& log_stem) {
   return r;
 }
 
-// 4 s of the `full` scenario, the default rig (imu0, imu1, gyro0, cam0 pinhole-radtan, cam1
-// pinhole-equidistant at 20 Hz: 160 images), from the coarse guess; simulated once per process.
-fs::path RenderedDataset() {
-  static const fs::path dir = [] {
-    const fs::path d =
-        fs::path(::testing::TempDir()) / ("ctcal_images_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    const CliRun r = Ctcal(
-        "simulate --scenario full --seed 31 --duration 4 --perturb coarse "
-        "--images --out " +
-            d.string(),
-        d.string() + "_simulate");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return d;
-  }();
-  return dir;
+// `seconds` of the `full` scenario, the default rig (imu0, imu1, gyro0, cam0 pinhole-radtan,
+// cam1 pinhole-equidistant, 20 Hz each), rendered, from the coarse guess; simulated once per
+// process (ctest runs each test in a process of its own).
+fs::path RenderedDataset(int seconds) {
+  static std::map<int, fs::path> done;
+  if (const auto it = done.find(seconds); it != done.end())
+    return it->second;
+  const fs::path d = fs::path(::testing::TempDir()) / ("ctcal_images_" + std::to_string(seconds) +
+                                                       "s_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  const CliRun r =
+      Ctcal("simulate --scenario full --seed 31 --duration " + std::to_string(seconds) +
+                " --perturb coarse --images --out " + d.string(),
+            d.string() + "_simulate");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return done[seconds] = d;
 }
 
 // Corners of a corners.csv by (stamp, id).
@@ -84,7 +84,7 @@ std::map<std::pair<std::int64_t, int>, Eigen::Vector2d> ById(
 }
 
 TEST(CalibrateImages, RenderedImagesOnlyMeetTheIssueBar) {
-  const fs::path data = RenderedDataset();
+  const fs::path data = RenderedDataset(4);  // 160 images
   for (const char* cam : {"cam0", "cam1"}) {
     ASSERT_TRUE(fs::exists(data / cam / "data.csv")) << cam;
     ASSERT_FALSE(fs::exists(data / cam / "corners.csv")) << cam << ": nothing to detect";
@@ -138,7 +138,7 @@ TEST(CalibrateImages, RenderedImagesOnlyMeetTheIssueBar) {
 // that is no image when `image` is empty) and returns the copy.
 fs::path DatasetWithImages(const std::string& tag, const std::string& camera,
                            const cv::Mat& image) {
-  const fs::path src = RenderedDataset();
+  const fs::path src = RenderedDataset(1);  // 40 images
   const fs::path dst = src.string() + "_" + tag;
   fs::remove_all(dst);
   fs::copy(src, dst, fs::copy_options::recursive);
@@ -173,7 +173,7 @@ void ExpectOneLineError(const CliRun& r, const std::string& what) {
 TEST(CalibrateImages, ImagesWithoutTheBoardNameStageAndCamera) {
   const cv::Mat grey(480, 752, CV_8UC1, cv::Scalar(128));
   ExpectOneLineError(CalibrateCopy(DatasetWithImages("blank", "cam0", grey)),
-                     "the board is in none of its 80 images");
+                     "the board is in none of its 20 images");
 }
 
 TEST(CalibrateImages, UnreadableImagesNameStageAndCamera) {
@@ -183,7 +183,7 @@ TEST(CalibrateImages, UnreadableImagesNameStageAndCamera) {
 
 // data.csv without rows and no corners.csv: nothing to calibrate the camera from.
 TEST(CalibrateImages, EmptyImageListNamesStageAndCamera) {
-  const fs::path src = RenderedDataset();
+  const fs::path src = RenderedDataset(1);  // 40 images
   const fs::path dst = src.string() + "_empty";
   fs::remove_all(dst);
   fs::copy(src, dst, fs::copy_options::recursive);
