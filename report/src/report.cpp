@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,9 +16,10 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
+#include "ctcal/report/distortion_field.h"
 #include "ctcal/report/plot.h"
-#include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -28,6 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPageW = 842.0, kPageH = 595.0;  // A4 landscape, pt
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPngScale = 1.25;  // PNG pixels per pt: the HTML's figures, --png-dir
 
 std::string Escape(const std::string& s) {
   std::string o;
@@ -473,6 +476,64 @@ class Builder {
     return sec;
   }
 
+  // Distortion field (distortion_field.h): arrows from the reference lens's pixel to the model's
+  // pixel of the same ray, and the displacement's magnitude over the image.
+  void DistortionFigure(Section* sec, const SensorConfig& s) const {
+    DistortionField d;
+    try {
+      d = ComputeDistortionField(s);
+    } catch (const std::exception& e) {
+      sec->html += "<p class=\"note\">distortion field not drawn: " + Escape(e.what()) + "</p>\n";
+      return;
+    }
+    if (d.model_uv.empty()) {
+      sec->html += "<p class=\"note\">no distortion field: " + s.camera_model + " with " +
+                   s.distortion_model + " distortion is the ideal pinhole.</p>\n";
+      return;
+    }
+    const double W = s.width, H = s.height;
+    // Arrows scaled so that the longest spans a grid cell; the scale is in the title.
+    const double scale = d.max_magnitude > 0 ? (W / 16.0) / d.max_magnitude : 1.0;
+    std::vector<double> x0, y0, dx, dy;
+    for (std::size_t i = 0; i < d.model_uv.size(); ++i) {
+      x0.push_back(d.reference_uv[i].x());
+      y0.push_back(d.reference_uv[i].y());
+      dx.push_back(scale * (d.model_uv[i].x() - d.reference_uv[i].x()));
+      dy.push_back(scale * (d.model_uv[i].y() - d.reference_uv[i].y()));
+    }
+    auto f = NewFigure("fig-" + s.name + "-distortion",
+                       s.name + ": distortion field vs " + d.reference + ", max " +
+                           FormatNumber(d.max_magnitude, 3) + " px",
+                       1, 2);
+    auto& p = f->Add<XYPlot>();
+    p.title = "reference -> model pixel, arrows x" + FormatNumber(scale, 3);
+    p.x_label = "u [px]";
+    p.y_label = "v [px]";
+    p.equal_aspect = true;
+    p.y_down = true;
+    p.x_min = -0.5;
+    p.x_max = W - 0.5;
+    p.y_min = -0.5;
+    p.y_max = H - 0.5;
+    p.Arrows(x0, y0, dx, dy, PaletteColor(0));
+    auto& hm = f->Add<HeatMap>();
+    hm.title = "|displacement| (grey: outside the model's field of view)";
+    hm.values = d.magnitude;
+    hm.x_lo = -0.5;
+    hm.x_hi = W - 0.5;
+    hm.y_lo = -0.5;
+    hm.y_hi = H - 0.5;
+    hm.x_label = "u [px]";
+    hm.y_label = "v [px]";
+    hm.value_label = "px";
+    sec->html += "<p class=\"note\">Distortion field: the reference is " + Escape(d.reference) +
+                 ", focal " + FormatNumber(d.focal.x(), 5) + " / " + FormatNumber(d.focal.y(), 5) +
+                 " px, principal point " + FormatNumber(d.principal_point.x(), 5) + ", " +
+                 FormatNumber(d.principal_point.y(), 5) + " px.</p>\n";
+    if (p.HasData())
+      sec->figures.push_back(f);
+  }
+
   Section CameraSection(const SensorConfig& s) {
     Section sec("sec-camera-" + s.name,
                 "Camera " + s.name + " (" + s.camera_model + ", " + s.distortion_model + ")");
@@ -563,59 +624,7 @@ class Builder {
       hm.value_label = "px";
       sec.figures.push_back(f);
     }
-    // Distortion field: where the lens moves the ideal pinhole image of each ray.
-    if (s.camera_model == "pinhole" && s.distortion_model != "none" && s.width > 0) {
-      try {
-        const CameraModel cam =
-            CameraModel::Create(s.camera_model, s.intrinsics, s.distortion_model,
-                                s.distortion_coeffs, Eigen::Vector2i(s.width, s.height));
-        std::vector<double> x0, y0, dx, dy, mag;
-        const double fx = s.intrinsics[0], fy = s.intrinsics[1], cx = s.intrinsics[2],
-                     cy = s.intrinsics[3];
-        double max_d = 0;
-        for (int j = 0; j <= 12; ++j) {
-          for (int i = 0; i <= 16; ++i) {
-            const Eigen::Vector2d uv(-0.5 + W * i / 16.0, -0.5 + H * j / 12.0);
-            Eigen::Vector3d ray;
-            if (!cam.Unproject(uv, &ray) || ray.z() <= 1e-6)
-              continue;
-            const Eigen::Vector2d ideal(fx * ray.x() / ray.z() + cx, fy * ray.y() / ray.z() + cy);
-            x0.push_back(ideal.x());
-            y0.push_back(ideal.y());
-            dx.push_back(uv.x() - ideal.x());
-            dy.push_back(uv.y() - ideal.y());
-            max_d = std::max(max_d, std::hypot(dx.back(), dy.back()));
-          }
-        }
-        const double scale = max_d > 0 ? (W / 16.0) / max_d : 1.0;
-        for (size_t i = 0; i < dx.size(); ++i) {
-          dx[i] *= scale;
-          dy[i] *= scale;
-        }
-        auto f = NewFigure("fig-" + s.name + "-distortion",
-                           s.name + ": distortion field (ideal pinhole -> distorted pixel), max " +
-                               FormatNumber(max_d, 3) + " px, arrows x" + FormatNumber(scale, 3),
-                           1, 1);
-        auto& p = f->Add<XYPlot>();
-        p.x_label = "u [px]";
-        p.y_label = "v [px]";
-        p.equal_aspect = true;
-        p.y_down = true;
-        p.x_min = -0.5;
-        p.x_max = W - 0.5;
-        p.y_min = -0.5;
-        p.y_max = H - 0.5;
-        p.Arrows(x0, y0, dx, dy, PaletteColor(0));
-        if (p.HasData())
-          sec.figures.push_back(f);
-      } catch (const std::exception& e) {
-        sec.html += "<p class=\"note\">distortion field not drawn: " + Escape(e.what()) + "</p>\n";
-      }
-    } else {
-      sec.html +=
-          "<p class=\"note\">distortion field drawn for pinhole cameras with a distortion "
-          "model only.</p>\n";
-    }
+    DistortionFigure(&sec, s);
     std::ostringstream h;
     h << "<p>" << c.size() << " corners in " << per_frame.size() << " images, " << ou.size()
       << " outliers; inlier RMS " << FormatNumber(Rms(du), 3) << " / " << FormatNumber(Rms(dv), 3)
@@ -1056,6 +1065,76 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
 
   if (!options.png_dir.empty())
     fs::create_directories(options.png_dir);
+
+  // The figures drawn, in document order; which of them need a PNG (the HTML's figures other
+  // than tables, every figure for --png-dir).
+  struct Job {
+    const Figure* figure = nullptr;
+    bool html_image = false;
+    bool png = false;
+    std::string bytes;
+  };
+  std::vector<Job> jobs;
+  for (const Section& s : sections) {
+    if (!s.omitted.empty())
+      continue;
+    for (const auto& f : s.figures) {
+      if (!f->HasData())
+        continue;  // never an empty figure
+      Job j;
+      j.figure = f.get();
+      // Table-only figures duplicate the HTML tables: the PDF needs them, the HTML does not.
+      j.html_image =
+          options.html && !std::all_of(f->panels().begin(), f->panels().end(), [](const auto& p) {
+            return dynamic_cast<const Table*>(p.get()) || dynamic_cast<const TextPanel*>(p.get());
+          });
+      j.png = j.html_image || !options.png_dir.empty();
+      jobs.push_back(std::move(j));
+    }
+  }
+  // PNGs are drawn and encoded by worker threads (each on its own cairo surface) while this
+  // thread writes the PDF pages: on the demo the PNGs are most of the work.
+  std::atomic<std::size_t> next{0};
+  std::vector<std::string> errors(jobs.size());
+  const auto worker = [&]() {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      if (!jobs[i].png)
+        continue;
+      try {
+        jobs[i].bytes = RenderPng(*jobs[i].figure, kPngScale);
+      } catch (const std::exception& e) {
+        errors[i] = jobs[i].figure->id + ": " + e.what();
+      }
+    }
+  };
+  const unsigned threads = std::clamp(options.threads > 0 ? static_cast<unsigned>(options.threads)
+                                                          : std::thread::hardware_concurrency(),
+                                      1u, 8u);
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < threads; ++t)
+    pool.emplace_back(worker);
+  std::string pdf_error;
+  if (options.pdf) {
+    out.pdf_path = (fs::path(out_dir) / "report.pdf").string();
+    try {
+      PdfDocument pdf(out.pdf_path);
+      for (const Job& j : jobs)
+        pdf.AddPage(*j.figure);
+      out.pdf_pages = pdf.pages();
+      pdf.Close();
+    } catch (const std::exception& e) {
+      pdf_error = e.what();
+    }
+  }
+  for (std::thread& t : pool)
+    t.join();
+  if (!pdf_error.empty())
+    throw std::runtime_error(pdf_error);
+  for (const std::string& e : errors) {
+    if (!e.empty())
+      throw std::runtime_error(e);
+  }
+
   std::ostringstream html;
   if (options.html) {
     html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
@@ -1065,11 +1144,7 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
       html << "<a href=\"#" << s.id << "\">" << Escape(s.heading) << "</a>";
     html << "</nav>\n";
   }
-  std::unique_ptr<PdfDocument> pdf;
-  if (options.pdf) {
-    out.pdf_path = (fs::path(out_dir) / "report.pdf").string();
-    pdf = std::make_unique<PdfDocument>(out.pdf_path);
-  }
+  std::size_t job = 0;
   for (const Section& s : sections) {
     out.section_ids.push_back(s.id);
     html << "<section id=\"" << s.id << "\"><h2>" << Escape(s.heading) << "</h2>\n";
@@ -1080,30 +1155,25 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     }
     html << s.html;
     for (const auto& f : s.figures) {
-      if (!f->HasData())
-        continue;  // never an empty figure
+      if (job >= jobs.size() || jobs[job].figure != f.get())
+        continue;  // an empty figure, not drawn
+      const Job& j = jobs[job++];
       out.figure_ids.push_back(f->id);
-      if (pdf)
-        pdf->AddPage(*f);
-      if (!options.png_dir.empty())
-        SavePng(*f, (fs::path(options.png_dir) / (f->id + ".png")).string(), 1.25);
-      // Table-only figures duplicate the HTML tables: the PDF needs them, the HTML does not.
-      const bool table_only =
-          std::all_of(f->panels().begin(), f->panels().end(), [](const auto& p) {
-            return dynamic_cast<const Table*>(p.get()) || dynamic_cast<const TextPanel*>(p.get());
-          });
-      if (options.html && !table_only) {
+      if (!options.png_dir.empty()) {
+        const std::string path = (fs::path(options.png_dir) / (f->id + ".png")).string();
+        std::ofstream png(path, std::ios::binary);
+        png.write(j.bytes.data(), static_cast<std::streamsize>(j.bytes.size()));
+        if (!png)
+          throw std::runtime_error(path + ": cannot write PNG");
+      }
+      if (j.html_image) {
         html << "<img class=\"fig\" id=\"" << f->id << "\" alt=\"" << Escape(f->title)
-             << "\" src=\"data:image/png;base64," << Base64(RenderPng(*f, 1.25)) << "\">\n";
+             << "\" src=\"data:image/png;base64," << Base64(j.bytes) << "\">\n";
       } else if (options.html) {
         html << "<div class=\"figtable\" id=\"" << f->id << "\"></div>\n";
       }
     }
     html << "</section>\n";
-  }
-  if (pdf) {
-    out.pdf_pages = pdf->pages();
-    pdf->Close();
   }
   if (options.html) {
     html << "</body></html>\n";
