@@ -867,15 +867,32 @@ void Table::Draw(void* cairo, const Rect& area) const {
     cols = std::max(cols, r.size());
   // Column widths from the content, scaled down to fit.
   std::vector<double> w(cols, 0.0);
-  for (size_t r = 0; r < rows.size(); ++r) {
-    for (size_t c = 0; c < rows[r].size(); ++c) {
-      SetFont(cr, font_size, r == 0, rows[r][c].monospace);
-      w[c] = std::max(w[c], TextWidth(cr, rows[r][c].text) + 12);
+  double total = 0;
+  const auto measure = [&](double size) {
+    std::fill(w.begin(), w.end(), 0.0);
+    for (size_t r = 0; r < rows.size(); ++r) {
+      for (size_t c = 0; c < rows[r].size(); ++c) {
+        SetFont(cr, size, r == 0, rows[r][c].monospace);
+        w[c] = std::max(w[c], TextWidth(cr, rows[r][c].text) + 12);
+      }
+    }
+    total = 0;
+    for (const double x : w)
+      total += x;
+  };
+  double fs = font_size;
+  measure(fs);
+  if (min_font_size > 0.0) {
+    // Text width scales with the font size, the 12 pt of padding per column does not.
+    const double pad = 12.0 * static_cast<double>(cols);
+    const double by_width = total > p.w ? fs * (p.w - pad) / std::max(total - pad, 1e-9) : fs;
+    const double by_height = p.h / (1.65 * static_cast<double>(rows.size()));
+    const double fitted = std::max(min_font_size, std::min({fs, by_width, by_height}));
+    if (fitted < fs) {
+      fs = fitted;
+      measure(fs);
     }
   }
-  double total = 0;
-  for (const double x : w)
-    total += x;
   if (total > p.w) {
     // Too wide: cap the widest columns at one common width, so that narrow ones (status,
     // sensor) stay whole and only long text is cut.
@@ -895,7 +912,7 @@ void Table::Draw(void* cairo, const Rect& area) const {
     total = p.w;
   }
   const double scale = 1.0;
-  const double rh = font_size * 1.65;
+  const double rh = fs * 1.65;
   double y = p.y;
   for (size_t r = 0; r < rows.size() && y + rh <= p.y + p.h + 0.5; ++r) {
     double x = p.x;
@@ -919,7 +936,7 @@ void Table::Draw(void* cairo, const Rect& area) const {
       } else {
         cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
       }
-      SetFont(cr, font_size, r == 0 || cell.has_fill, cell.monospace);
+      SetFont(cr, fs, r == 0 || cell.has_fill, cell.monospace);
       Text(cr, Fit(cr, cell.text, cw - 8), x + 5, y + rh / 2, 0.0, 0.5);
       x += cw;
     }
@@ -1146,10 +1163,22 @@ void MatrixPlot::Draw(void* cairo, const Rect& area) const {
 void TextPanel::Draw(void* cairo, const Rect& area) const {
   cairo_t* cr = Cr(cairo);
   PanelTitle(cr, title, area);
-  SetFont(cr, font_size, false, monospace);
-  cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+  double fs = font_size;
   double y = area.y + (title.empty() ? 4 : 24);
-  const double lh = font_size * 1.45;
+  if (min_font_size > 0.0 && !lines.empty()) {
+    // Monospace blocks (code to paste) must not wrap or be cut: shrink to the widest line and
+    // to the height.
+    SetFont(cr, fs, false, monospace);
+    double widest = 0.0;
+    for (const std::string& line : lines)
+      widest = std::max(widest, TextWidth(cr, line));
+    const double by_width = monospace && widest > area.w - 8 ? fs * (area.w - 8) / widest : fs;
+    const double by_height = (area.y + area.h - y) / (1.45 * static_cast<double>(lines.size()));
+    fs = std::max(min_font_size, std::min({fs, by_width, by_height}));
+  }
+  SetFont(cr, fs, false, monospace);
+  cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+  const double lh = fs * 1.45;
   for (const std::string& line : lines) {
     // Greedy word wrap (monospace blocks are not wrapped, only cut).
     std::istringstream words(line);
