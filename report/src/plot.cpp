@@ -885,7 +885,8 @@ void Table::Draw(void* cairo, const Rect& area) const {
   if (min_font_size > 0.0) {
     // Text width scales with the font size, the 12 pt of padding per column does not.
     const double pad = 12.0 * static_cast<double>(cols);
-    const double by_width = total > p.w ? fs * (p.w - pad) / std::max(total - pad, 1e-9) : fs;
+    const double by_width =
+        total > p.w ? 0.97 * fs * (p.w - pad) / std::max(total - pad, 1e-9) : fs;
     const double by_height = p.h / (1.65 * static_cast<double>(rows.size()));
     const double fitted = std::max(min_font_size, std::min({fs, by_width, by_height}));
     if (fitted < fs) {
@@ -1172,7 +1173,9 @@ void TextPanel::Draw(void* cairo, const Rect& area) const {
     double widest = 0.0;
     for (const std::string& line : lines)
       widest = std::max(widest, TextWidth(cr, line));
-    const double by_width = monospace && widest > area.w - 8 ? fs * (area.w - 8) / widest : fs;
+    // 3 % margin: hinted glyph advances do not scale exactly with the size.
+    const double by_width =
+        monospace && widest > area.w - 8 ? 0.97 * fs * (area.w - 8) / widest : fs;
     const double by_height = (area.y + area.h - y) / (1.45 * static_cast<double>(lines.size()));
     fs = std::max(min_font_size, std::min({fs, by_width, by_height}));
   }
