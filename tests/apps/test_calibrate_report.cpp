@@ -278,12 +278,13 @@ TEST(CalibrateReport, SimulateCalibrateReport) {
 // the corners' whitened RMS recomputed from the report data equals result.yaml's (poses are read
 // exactly as the discrete corner residuals read them). The inertial rows compare each sample with
 // the keyframe states' interpolation, which the discrete problem itself never evaluates: their
-// RMS is printed, and must stay that of a sane fit.
+// RMS is printed, and must stay that of a sane fit. A 5 s recording: the discrete solve is the
+// slowest step of the suite.
 TEST(CalibrateReportDiscrete, FullReportFromTheKeyframeStates) {
   const std::string root = report::test::MakeTempDir("ctcal_discrete_report");
   const std::string out = root + "/out", data = root + "/data";
   const std::string bin = CTCAL_BINARY;
-  ASSERT_EQ(std::system((bin + " simulate --scenario full --seed 5 --duration 8 --out " + data +
+  ASSERT_EQ(std::system((bin + " simulate --scenario full --seed 5 --duration 5 --out " + data +
                          " > " + root + "/simulate.log 2>&1")
                             .c_str()),
             0)
@@ -328,8 +329,10 @@ TEST(CalibrateReportDiscrete, FullReportFromTheKeyframeStates) {
     const double rms = std::sqrt(sum / (3.0 * gyro.size()));
     std::printf("discrete report: %s gyro whitened RMS per sample %.3f (preintegrated %.3f)\n",
                 s.name.c_str(), rms, *stats.rms_whitened_gyro);
+    // Measured 3.8 - 4.3 on the 8 s recording: the cubic rotation between 0.05 s keyframes is the
+    // larger part; a wrong frame or clock gives hundreds.
     EXPECT_GT(rms, 0.5) << s.name;
-    EXPECT_LT(rms, 5.0) << s.name;
+    EXPECT_LT(rms, 10.0) << s.name;
   }
   fs::remove_all(root);
 }
