@@ -329,8 +329,8 @@ TEST(CalibrateReportDiscrete, FullReportFromTheKeyframeStates) {
     const double rms = std::sqrt(sum / (3.0 * gyro.size()));
     std::printf("discrete report: %s gyro whitened RMS per sample %.3f (preintegrated %.3f)\n",
                 s.name.c_str(), rms, *stats.rms_whitened_gyro);
-    // Measured 3.8 - 4.3 on the 8 s recording (3.2 - 3.6 on the 5 s one): the cubic rotation between 0.05 s keyframes is the
-    // larger part; a wrong frame or clock gives hundreds.
+    // Measured 3.8 - 4.3 on the 8 s recording (3.2 - 3.6 on the 5 s one): the cubic rotation
+    // between 0.05 s keyframes is the larger part; a wrong frame or clock gives hundreds.
     EXPECT_GT(rms, 0.5) << s.name;
     EXPECT_LT(rms, 10.0) << s.name;
   }
