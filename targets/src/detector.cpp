@@ -580,7 +580,7 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
              (uv[k] - start).norm() <= bit_px && inside(uv[k]);
         refined[k].id = ids[k];
         refined[k].uv = uv[k];
-        refined[k].sigma = std::max(options.min_sigma_px, sigma);
+        refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
       }
       if (!ok)
         continue;
@@ -817,8 +817,31 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   // The 8-bit quantisation alone is uniform noise of 1/sqrt(12) grey levels.
   const double noise_sigma =
       options_.refine ? std::max(EstimateNoiseSigma(gray), 1.0 / std::sqrt(12.0)) : 0.0;
-  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray, noise_sigma)
-                                                 : DetectCheckerboard(gray, noise_sigma);
+  result = board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray, noise_sigma)
+                                                   : DetectCheckerboard(gray, noise_sigma);
+  if (options_.refine && result.board_found)
+    AddModelError(&result);
+  return result;
+}
+
+// The refinement's sigma propagates image noise only. The corners of a view also carry errors
+// that no noise term sees: the refinement's model of an X-junction against the real blurred one,
+// the print, the lens' point-spread. Their size shows in how far the corners scatter about a
+// smooth grid (EstimateGridScatter); what exceeds the noise is this view's model error, added in
+// quadrature to every corner's noise sigma.
+void Detector::AddModelError(DetectionResult* result) const {
+  const GridScatter scatter = EstimateGridScatter(board_, result->corners);
+  double noise2 = 0.0;
+  for (const DetectedCorner& c : result->corners)
+    noise2 += c.sigma * c.sigma / static_cast<double>(result->corners.size());
+  result->grid_scatter_px =
+      scatter.windows >= options_.min_scatter_windows ? scatter.sigma_px : 0.0;
+  const double model2 = scatter.windows >= options_.min_scatter_windows
+                            ? std::max(0.0, scatter.sigma_px * scatter.sigma_px - noise2)
+                            : options_.default_model_sigma_px * options_.default_model_sigma_px;
+  result->model_sigma_px = std::sqrt(model2);
+  for (DetectedCorner& c : result->corners)
+    c.sigma = std::max(options_.min_sigma_px, std::sqrt(c.sigma * c.sigma + model2));
 }
 
 DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {
@@ -885,7 +908,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
           ok = false;
           break;
         }
-        refined[k].sigma = std::max(options_.min_sigma_px, sigma);
+        refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
       }
       // A refined corner that landed on another junction shifts the bit grid near it: the tag
       // must still read as its code word at the refined corners.
@@ -1038,7 +1061,7 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
       if (RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) &&
           (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
-        corner.sigma = std::max(options_.min_sigma_px, sigma);
+        corner.sigma = sigma;  // noise only; Detect adds the view's model error
       } else {
         result.rejected.push_back({id, RejectReason::kRefinementJump});
         continue;

@@ -196,6 +196,99 @@ TEST(DetectReal, OpencvCheckerboardsCalibrateLikeOpencv) {
       K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2));
 }
 
+// The sigma written to corners.csv against the residuals of a calibrated camera: opencv-doc's 13
+// checkerboard views calibrated together (OpenCV's 5-parameter radtan), and each real EuRoC view
+// calibrated on its own (pinhole-radtan from EuRoC's published values, k3 fixed). Whitened
+// residual RMS per coordinate, corrected for the parameters fitted: 1 if the sigma is honest.
+double WhitenedRms(const std::vector<std::vector<cv::Point3f>>& object,
+                   const std::vector<std::vector<cv::Point2f>>& image,
+                   const std::vector<std::vector<double>>& sigma, const cv::Size& size, cv::Mat K,
+                   cv::Mat dist, int flags, int intrinsics, double* rms_px) {
+  std::vector<cv::Mat> rvecs, tvecs;
+  cv::calibrateCamera(object, image, size, K, dist, rvecs, tvecs, flags);
+  double sum2 = 0.0, raw2 = 0.0;
+  int n = 0;
+  for (size_t v = 0; v < object.size(); ++v) {
+    std::vector<cv::Point2f> projected;
+    cv::projectPoints(object[v], rvecs[v], tvecs[v], K, dist, projected);
+    for (size_t i = 0; i < projected.size(); ++i) {
+      const cv::Point2f d = projected[i] - image[v][i];
+      sum2 += d.dot(d) / (sigma[v][i] * sigma[v][i]);
+      raw2 += d.dot(d);
+      n += 2;
+    }
+  }
+  const int parameters = intrinsics + 6 * static_cast<int>(object.size());
+  *rms_px = std::sqrt(raw2 / (n - parameters));
+  return std::sqrt(sum2 / (n - parameters));
+}
+
+void AddView(const Board& board, const DetectionResult& r,
+             std::vector<std::vector<cv::Point3f>>* object,
+             std::vector<std::vector<cv::Point2f>>* image,
+             std::vector<std::vector<double>>* sigma) {
+  object->emplace_back();
+  image->emplace_back();
+  sigma->emplace_back();
+  for (const DetectedCorner& c : r.corners) {
+    const Eigen::Vector3d& p = board.Corner(c.id);
+    object->back().emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), 0.0f);
+    image->back().emplace_back(static_cast<float>(c.uv.x()), static_cast<float>(c.uv.y()));
+    sigma->back().push_back(c.sigma);
+  }
+}
+
+TEST(DetectReal, SigmaIsHonestOnCalibratedRealViews) {
+  SKIP_UNLESS_EXISTS(kOpencvDir + "left01.jpg");
+  {
+    const Board board(Opencv9x6());
+    const std::vector<DetectionResult> results = Detector(board).DetectFiles(OpencvLeftImages());
+    std::vector<std::vector<cv::Point3f>> object;
+    std::vector<std::vector<cv::Point2f>> image;
+    std::vector<std::vector<double>> sigma;
+    double mean_sigma = 0.0;
+    for (const DetectionResult& r : results) {
+      ASSERT_TRUE(r.board_found);
+      AddView(board, r, &object, &image, &sigma);
+      for (const DetectedCorner& c : r.corners)
+        mean_sigma += c.sigma / (54.0 * static_cast<double>(results.size()));
+    }
+    double rms = 0.0;
+    const double whitened =
+        WhitenedRms(object, image, sigma, cv::Size(640, 480), cv::Mat(), cv::Mat(), 0, 9, &rms);
+    std::printf(
+        "opencv-doc left*.jpg: residual %.3f px per coordinate, mean sigma %.3f px, "
+        "whitened RMS %.2f\n",
+        rms, mean_sigma, whitened);
+    EXPECT_GT(whitened, 0.7);
+    EXPECT_LT(whitened, 2.0);
+  }
+  const Board board = Euroc6x6();
+  for (const std::string& path :
+       {kAprilDir + "EuRoC.png", kEurocDir + "cam0_1403709395937837056.png",
+        kEurocDir + "cam1_1403709395937837056.png"}) {
+    SKIP_UNLESS_EXISTS(path);
+    const DetectionResult r = DetectFile(Detector(board), path);
+    ASSERT_EQ(r.corners.size(), 144u) << path;
+    std::vector<std::vector<cv::Point3f>> object;
+    std::vector<std::vector<cv::Point2f>> image;
+    std::vector<std::vector<double>> sigma;
+    AddView(board, r, &object, &image, &sigma);
+    const cv::Mat K = (cv::Mat_<double>(3, 3) << 458.654, 0, 367.215, 0, 457.296, 248.375, 0, 0, 1);
+    const cv::Mat dist =
+        (cv::Mat_<double>(1, 5) << -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0);
+    double rms = 0.0;
+    const double whitened = WhitenedRms(object, image, sigma, cv::Size(752, 480), K, dist,
+                                        cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_K3, 8, &rms);
+    std::printf(
+        "%s: residual %.3f px per coordinate, scatter %.3f px, sigma %.3f px, whitened "
+        "RMS %.2f\n",
+        fs::path(path).filename().c_str(), rms, r.grid_scatter_px, r.corners[0].sigma, whitened);
+    EXPECT_GT(whitened, 0.7) << path;
+    EXPECT_LT(whitened, 2.0) << path;
+  }
+}
+
 TEST(DetectReal, ParallelDetectionIsDeterministic) {
   SKIP_UNLESS_EXISTS(kOpencvDir + "left01.jpg");
   DetectorOptions one_thread;
