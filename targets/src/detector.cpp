@@ -34,6 +34,8 @@ const char* ToString(RejectReason reason) {
       return "black border not as printed (wrong blackTagBorder?)";
     case RejectReason::kTooSmall:
       return "too small to refine";
+    case RejectReason::kOffEdges:
+      return "a refined corner off the tag's edges";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -466,6 +468,115 @@ int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& c
   return distance;
 }
 
+// How far each refined corner of a tag lies off the tag's own edges (px), a check the grid and the
+// code cannot make: on a foreshortened fisheye view a corner can slide 1-2 px along a narrow bit
+// onto the corner square's side and the tag still reads as its code. Each edge's position is
+// measured across it (the centroid of the intensity rise from the black border into the white
+// gap) at 8 places along its middle (15-85 %, clear of the corner squares), relative to the edge
+// the four refined corners predict (homography, tag cells -> px). Lens distortion bends the edge
+// into a bow, zero at both ends: the offsets d(t) are fitted by
+//   d(t) = alpha (1 - t) + beta t + gamma t (1 - t),
+// and alpha, beta are the edge's offsets at its two corners, i.e. the corners' offsets across it.
+// A corner's two edges give its offset; -1 where an edge cannot be measured (image border).
+std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
+                                           const std::array<Eigen::Vector2d, 4>& corners,
+                                           int black_border, int cells) {
+  const double n = cells;
+  const std::array<Eigen::Vector2d, 4> cell = {Eigen::Vector2d(0.0, n), Eigen::Vector2d(n, n),
+                                               Eigen::Vector2d(n, 0.0), Eigen::Vector2d(0.0, 0.0)};
+  std::vector<cv::Point2f> from, to;
+  for (size_t k = 0; k < 4; ++k) {
+    from.emplace_back(static_cast<float>(cell[k].x()), static_cast<float>(cell[k].y()));
+    to.emplace_back(static_cast<float>(corners[k].x()), static_cast<float>(corners[k].y()));
+  }
+  const cv::Mat Hcv = cv::getPerspectiveTransform(from, to);
+  Eigen::Matrix3d H;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      H(r, c) = Hcv.at<double>(r, c);
+  const auto to_px = [&H](const Eigen::Vector2d& x) {
+    return Eigen::Vector2d((H * x.homogeneous()).hnormalized());
+  };
+  // Across the edge: inside stays in the black border, outside in the white gap.
+  const double reach = std::min(0.8 * black_border, 1.6);
+  constexpr double kStep = 0.05;
+  constexpr int kSamples = 8;
+  // Offsets of each edge at its start and end corner (cells, outward positive).
+  std::array<Eigen::Vector2d, 4> ends;
+  std::array<bool, 4> measured{};
+  for (size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d a = cell[k], b = cell[(k + 1) % 4];
+    const Eigen::Vector2d along = (b - a) / n;
+    // Corners run clockwise on the printed tag (tag cells: x right, y down): outward is to the
+    // left.
+    const Eigen::Vector2d outward(-along.y(), along.x());
+    Eigen::Matrix<double, kSamples, 3> A;
+    Eigen::Matrix<double, kSamples, 1> d;
+    bool ok = true;
+    for (int j = 0; j < kSamples && ok; ++j) {
+      const double t = 0.15 + 0.7 * j / (kSamples - 1);
+      const Eigen::Vector2d base = a + t * (b - a);
+      double previous = -1.0, sum_g = 0.0, sum_gs = 0.0;
+      for (double s = -reach; s <= reach + 1e-9; s += kStep) {
+        const Eigen::Vector2d uv = to_px(base + s * outward);
+        const double value = SampleBilinear(gray, uv.x(), uv.y());
+        if (value < 0.0) {
+          ok = false;
+          break;
+        }
+        if (previous >= 0.0 && value > previous) {
+          sum_g += value - previous;
+          sum_gs += (value - previous) * (s - 0.5 * kStep);
+        }
+        previous = value;
+      }
+      if (!ok || sum_g <= 0.0)
+        break;
+      A(j, 0) = 1.0 - t;
+      A(j, 1) = t;
+      A(j, 2) = t * (1.0 - t);
+      d(j) = sum_gs / sum_g;
+    }
+    if (!ok)
+      continue;
+    const Eigen::Vector3d x = A.colPivHouseholderQr().solve(d);
+    ends[k] = x.head<2>();
+    measured[k] = true;
+  }
+  // Ends in px across their edge, with the tag's scale at each corner.
+  std::array<Eigen::Vector2d, 4> ends_px;
+  std::vector<double> all_ends;
+  for (size_t k = 0; k < 4; ++k) {
+    if (!measured[k])
+      continue;
+    const Eigen::Vector2d outward =
+        Eigen::Vector2d(-(cell[(k + 1) % 4] - cell[k]).y(), (cell[(k + 1) % 4] - cell[k]).x()) / n;
+    for (int e = 0; e < 2; ++e) {
+      const Eigen::Vector2d& c = cell[(k + static_cast<size_t>(e)) % 4];
+      ends_px[k](e) = ends[k](e) * (to_px(c + 0.5 * outward) - to_px(c - 0.5 * outward)).norm();
+      all_ends.push_back(ends_px[k](e));
+    }
+  }
+  // Ink spreads on the print and the camera's response is not linear: every edge of a real tag
+  // sits a common distance outside (or inside) the line through its X-junctions (0.3-0.6 px on
+  // EuRoC's views), which moves no X-junction. The median over the tag's edge ends is that
+  // distance; a corner's offset is what remains.
+  double spread = 0.0;
+  if (!all_ends.empty()) {
+    std::nth_element(all_ends.begin(), all_ends.begin() + static_cast<long>(all_ends.size() / 2),
+                     all_ends.end());
+    spread = all_ends[all_ends.size() / 2];
+  }
+  std::array<double, 4> offsets;
+  for (size_t k = 0; k < 4; ++k) {
+    const size_t before = (k + 3) % 4;  // the edge ending at corner k
+    offsets[k] = measured[k] && measured[before]
+                     ? std::hypot(ends_px[k](0) - spread, ends_px[before](1) - spread)
+                     : -1.0;
+  }
+  return offsets;
+}
+
 // Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
 // is the black border's width (and the corner square); the window stays inside it, and is at
 // least Kalibr's 5 x 5.
@@ -489,6 +600,46 @@ TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& 
     }
   }
   return tags;
+}
+
+// Drops every accepted tag with a corner off the tag's own edges (TagCornerEdgeOffsets). How well
+// the edges can be measured depends on the view (blur, ink, the camera's response: good corners
+// of real TUM-VI views sit up to 1 px off, those of rendered views within 0.6 px), so a tag is an
+// outlier when its largest offset exceeds both max_edge_offset_px and `kViewMedians` times the
+// view's median of that largest offset.
+void DropTagsOffTheirEdges(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
+                           DetectionResult* result) {
+  constexpr double kViewMedians = 4.0;
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const TagCorners tags = TagsOfCorners(board, result->corners);
+  std::map<int, double> worst;
+  for (const auto& [id, uv] : tags) {
+    const std::array<double, 4> offsets = TagCornerEdgeOffsets(gray, uv, border, cells);
+    worst[id] = *std::max_element(offsets.begin(), offsets.end());
+  }
+  if (worst.empty())
+    return;
+  std::vector<double> values;
+  for (const auto& entry : worst)
+    values.push_back(entry.second);
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(values.size() / 2),
+                   values.end());
+  const double bound =
+      std::max(options.max_edge_offset_px, kViewMedians * values[values.size() / 2]);
+  for (const auto& [id, offset] : worst) {
+    if (!(offset > bound))
+      continue;
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    result->corners.erase(std::remove_if(result->corners.begin(), result->corners.end(),
+                                         [&ids](const DetectedCorner& c) {
+                                           return std::find(ids.begin(), ids.end(), c.id) !=
+                                                  ids.end();
+                                         }),
+                          result->corners.end());
+    --result->tags_accepted;
+    result->rejected.push_back({id, RejectReason::kOffEdges});
+  }
 }
 
 // Grid completion. libapriltag misses tags that a person sees at once: under fisheye distortion
@@ -988,6 +1139,8 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
     keep_better(std::move(full));
   }
   ReleaseTagContext(std::move(context));
+  if (options_.refine)
+    DropTagsOffTheirEdges(gray, board_, options_, &result);
   if (result.tags_accepted < options_.min_tags) {
     if (result.tags_accepted > 0)
       result.rejected.push_back({-1, RejectReason::kTooFewTags});

@@ -39,6 +39,12 @@ struct DetectorOptions {
   // px per bit were off by ~1 px). Set between that and the simulator's 512x512 fisheye, whose
   // tags at ~1.7 px per bit have corners within 0.17 px (95 %); tests/sim/test_images.cpp.
   double min_bit_px = 1.6;
+  // A tag with a refined corner farther than this from its own edges (measured across each edge
+  // along its middle, extrapolated to the corner) is dropped: on oblique fisheye views a corner
+  // can slide along a narrow bit onto the corner square and still pass the jump bound and the
+  // code check. On rendered double-sphere views good corners sit within 0.56 px (99.9 %), corners
+  // more than 1 px off at 0.73-2.9 px (docs/targets.md).
+  double max_edge_offset_px = 0.75;
   // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
   // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
   bool refine = true;
@@ -67,6 +73,7 @@ enum class RejectReason {
                     // longer reads as its code word at the refined corners
   kBadBorder,       // decoded, but its black border is not blackTagBorder bits wide
   kTooSmall,        // fewer than min_bit_px pixels per bit: too small to refine its corners
+  kOffEdges,        // a refined corner lies off the tag's own edges (max_edge_offset_px)
   kTooFewTags,      // the whole view: fewer than min_tags tags left
 };
 const char* ToString(RejectReason reason);
