@@ -478,38 +478,52 @@ int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& c
 //   d(t) = alpha (1 - t) + beta t + gamma t (1 - t),
 // and alpha, beta are the edge's offsets at its two corners, i.e. the corners' offsets across it.
 // A corner's two edges give its offset; -1 where an edge cannot be measured (image border).
-std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
-                                           const std::array<Eigen::Vector2d, 4>& corners,
-                                           int black_border, int cells) {
+// The four edges of a tag measured against the edges its corners predict (see below).
+struct TagEdgeFit {
+  Eigen::Matrix3d H;  // tag cells (x right, y down the printed tag) -> px, through the corners
+  // Each edge's offset at its start and end corner (cells, outward positive), where measured.
+  std::array<Eigen::Vector2d, 4> ends;
+  std::array<bool, 4> measured{};
+};
+
+// The tag's corners in tag cells, in the tag's corner order.
+std::array<Eigen::Vector2d, 4> TagCellCorners(int cells) {
   const double n = cells;
-  const std::array<Eigen::Vector2d, 4> cell = {Eigen::Vector2d(0.0, n), Eigen::Vector2d(n, n),
-                                               Eigen::Vector2d(n, 0.0), Eigen::Vector2d(0.0, 0.0)};
+  return {Eigen::Vector2d(0.0, n), Eigen::Vector2d(n, n), Eigen::Vector2d(n, 0.0),
+          Eigen::Vector2d(0.0, 0.0)};
+}
+
+// Outward unit normal (tag cells) of edge k -> k+1: corners run clockwise on the printed tag
+// (x right, y down), so outward is to the left.
+Eigen::Vector2d TagEdgeOutward(int cells, size_t k) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
+  const Eigen::Vector2d along = (cell[(k + 1) % 4] - cell[k]) / cells;
+  return Eigen::Vector2d(-along.y(), along.x());
+}
+
+Eigen::Vector2d ToPixel(const Eigen::Matrix3d& H, const Eigen::Vector2d& x) {
+  return (H * x.homogeneous()).hnormalized();
+}
+
+// `reach`: how far across each edge (cells) the profile runs each way.
+TagEdgeFit FitTagEdges(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                       int cells, double reach) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
   std::vector<cv::Point2f> from, to;
   for (size_t k = 0; k < 4; ++k) {
     from.emplace_back(static_cast<float>(cell[k].x()), static_cast<float>(cell[k].y()));
     to.emplace_back(static_cast<float>(corners[k].x()), static_cast<float>(corners[k].y()));
   }
   const cv::Mat Hcv = cv::getPerspectiveTransform(from, to);
-  Eigen::Matrix3d H;
+  TagEdgeFit fit;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      H(r, c) = Hcv.at<double>(r, c);
-  const auto to_px = [&H](const Eigen::Vector2d& x) {
-    return Eigen::Vector2d((H * x.homogeneous()).hnormalized());
-  };
-  // Across the edge: inside stays in the black border, outside in the white gap.
-  const double reach = std::min(0.8 * black_border, 1.6);
+      fit.H(r, c) = Hcv.at<double>(r, c);
   constexpr double kStep = 0.05;
   constexpr int kSamples = 8;
-  // Offsets of each edge at its start and end corner (cells, outward positive).
-  std::array<Eigen::Vector2d, 4> ends;
-  std::array<bool, 4> measured{};
   for (size_t k = 0; k < 4; ++k) {
     const Eigen::Vector2d a = cell[k], b = cell[(k + 1) % 4];
-    const Eigen::Vector2d along = (b - a) / n;
-    // Corners run clockwise on the printed tag (tag cells: x right, y down): outward is to the
-    // left.
-    const Eigen::Vector2d outward(-along.y(), along.x());
+    const Eigen::Vector2d outward = TagEdgeOutward(cells, k);
     Eigen::Matrix<double, kSamples, 3> A;
     Eigen::Matrix<double, kSamples, 1> d;
     bool ok = true;
@@ -517,32 +531,41 @@ std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
       const double t = 0.15 + 0.7 * j / (kSamples - 1);
       const Eigen::Vector2d base = a + t * (b - a);
       double previous = -1.0, sum_g = 0.0, sum_gs = 0.0;
-      for (double s = -reach; s <= reach + 1e-9; s += kStep) {
-        const Eigen::Vector2d uv = to_px(base + s * outward);
+      for (double s = -reach; s <= reach + 1e-9 && ok; s += kStep) {
+        const Eigen::Vector2d uv = ToPixel(fit.H, base + s * outward);
         const double value = SampleBilinear(gray, uv.x(), uv.y());
-        if (value < 0.0) {
-          ok = false;
-          break;
-        }
-        if (previous >= 0.0 && value > previous) {
+        ok = value >= 0.0;
+        if (ok && previous >= 0.0 && value > previous) {
           sum_g += value - previous;
           sum_gs += (value - previous) * (s - 0.5 * kStep);
         }
         previous = value;
       }
-      if (!ok || sum_g <= 0.0)
-        break;
+      ok = ok && sum_g > 0.0;
       A(j, 0) = 1.0 - t;
       A(j, 1) = t;
       A(j, 2) = t * (1.0 - t);
-      d(j) = sum_gs / sum_g;
+      d(j) = ok ? sum_gs / sum_g : 0.0;
     }
     if (!ok)
       continue;
     const Eigen::Vector3d x = A.colPivHouseholderQr().solve(d);
-    ends[k] = x.head<2>();
-    measured[k] = true;
+    fit.ends[k] = x.head<2>();
+    fit.measured[k] = true;
   }
+  return fit;
+}
+
+std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
+                                           const std::array<Eigen::Vector2d, 4>& corners,
+                                           int black_border, int cells) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
+  // Across the edge: inside stays in the black border, outside in the white gap.
+  const TagEdgeFit fit = FitTagEdges(gray, corners, cells, std::min(0.8 * black_border, 1.6));
+  const auto& ends = fit.ends;
+  const auto& measured = fit.measured;
+  const auto to_px = [&fit](const Eigen::Vector2d& x) { return ToPixel(fit.H, x); };
+  const double n = cells;
   // Ends in px across their edge, with the tag's scale at each corner.
   std::array<Eigen::Vector2d, 4> ends_px;
   std::vector<double> all_ends;
@@ -722,21 +745,54 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
       const int half_window = TagCornerHalfWindow(border, bit_px);
       std::array<DetectedCorner, 4> refined;
       std::array<Eigen::Vector2d, 4> uv;
-      bool ok = true;
-      for (size_t k = 0; k < 4 && ok; ++k) {
-        const Eigen::Vector2d start(predicted[k].x, predicted[k].y);
-        uv[k] = start;
-        double sigma = 0.0;
-        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
-             (uv[k] - start).norm() <= bit_px && inside(uv[k]);
-        refined[k].id = ids[k];
-        refined[k].uv = uv[k];
-        refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
-      }
-      if (!ok)
-        continue;
-      const int distance = TagCodeDistance(gray, uv, board, id);
-      if (distance < 0 || distance > 2)
+      // Refines the four corners from `starts` and reads the tag there.
+      const auto refine_from = [&](const std::array<Eigen::Vector2d, 4>& starts) {
+        bool ok = true;
+        for (size_t k = 0; k < 4 && ok; ++k) {
+          uv[k] = starts[k];
+          double sigma = 0.0;
+          ok = inside(starts[k]) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
+               (uv[k] - starts[k]).norm() <= bit_px && inside(uv[k]);
+          refined[k].id = ids[k];
+          refined[k].uv = uv[k];
+          refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
+        }
+        if (!ok)
+          return false;
+        // Compared with the one code word printed there (not searched among all 587): 3 wrong
+        // bits of 36 pass by chance with probability 1e-7, and blur at a fisheye's rim costs
+        // a bit or two more than libapriltag's own quads see.
+        const int distance = TagCodeDistance(gray, uv, board, id);
+        return distance >= 0 && distance <= 3;
+      };
+      std::array<Eigen::Vector2d, 4> starts;
+      for (size_t k = 0; k < 4; ++k)
+        starts[k] = Eigen::Vector2d(predicted[k].x, predicted[k].y);
+      // Where the neighbour's homography extrapolates badly (the strongest distortion at a
+      // fisheye's rim, where the spacing shrinks tag by tag: 5-7 px off on TUM-VI's top.png),
+      // three accepted tags in a line before it extrapolate each corner with that shrinking:
+      // equal steps on the board, so p = 3 p_1 - 3 p_2 + p_3 is exact for a quadratic.
+      const auto from_line = [&](std::array<Eigen::Vector2d, 4>* out) {
+        const int r = id / cols, c = id % cols;
+        for (const auto& [dr, dc] : std::vector<std::pair<int, int>>{
+                 {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {-1, 1}, {1, -1}, {1, 1}}) {
+          std::array<const std::array<Eigen::Vector2d, 4>*, 3> line{};
+          bool complete = true;
+          for (int step = 1; step <= 3 && complete; ++step) {
+            const int rr = r + step * dr, cc = c + step * dc;
+            complete = rr >= 0 && cc >= 0 && rr < rows && cc < cols && found.count(rr * cols + cc);
+            if (complete)
+              line[static_cast<size_t>(step - 1)] = &found.at(rr * cols + cc);
+          }
+          if (!complete)
+            continue;
+          for (size_t k = 0; k < 4; ++k)
+            (*out)[k] = 3.0 * (*line[0])[k] - 3.0 * (*line[1])[k] + (*line[2])[k];
+          return true;
+        }
+        return false;
+      };
+      if (!refine_from(starts) && !(from_line(&starts) && refine_from(starts)))
         continue;
       found[id] = uv;
       result->corners.insert(result->corners.end(), refined.begin(), refined.end());
