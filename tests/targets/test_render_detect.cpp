@@ -676,5 +676,47 @@ TEST(RenderDetect, SigmaIsHonestAgainstTheTruth) {
   }
 }
 
+// ChArUco through OpenCV's aruco module: a rendered 7 x 5 board (DICT_4X4_50) from three poses,
+// incl. a half turn; every corner's id and position must match the true projection of OpenCV's
+// own corner (Board takes ids and positions from cv::aruco::CharucoBoard), and the markers must
+// decode from our texture (a mirrored or misplaced marker would not).
+TEST(RenderDetect, CharucoCornersAndIds) {
+  const RadtanCamera camera;
+  TargetConfig config;
+  config.type = TargetType::kCharuco;
+  config.squares_x = 7;
+  config.squares_y = 5;
+  config.square_length_m = 0.06;
+  config.marker_length_m = 0.045;
+  config.dictionary = "DICT_4X4_50";
+  const Board board(config);
+  ASSERT_EQ(board.NumCorners(), 24);
+  ASSERT_EQ(board.Markers().size(), 17u);
+  const BoardRenderer renderer(board, 752, 480, Unprojection(camera));
+  const Detector detector(board);
+  const Eigen::Vector3d centre(0.21, 0.15, 0.0);
+  for (const auto& [p_W, roll] : std::vector<std::pair<Eigen::Vector3d, double>>{
+           {{0.25, 0.12, 0.55}, 0.1}, {{0.0, 0.3, 0.5}, 0.4}, {{0.35, 0.05, 0.6}, M_PI + 0.2}}) {
+    const Eigen::Isometry3d T_W_C = LookAt(p_W, centre, roll);
+    const DetectionResult result = detector.Detect(renderer.Render(T_W_C, 5));
+    const Errors e = Compare(board, camera, T_W_C, result);
+    std::printf(
+        "charuco 7x5 from (%.2f, %.2f, %.2f): %d markers, %d corners, RMS %.3f px, max "
+        "%.3f px\n",
+        p_W.x(), p_W.y(), p_W.z(), result.tags_accepted, e.matched, e.rms, e.max);
+    EXPECT_EQ(result.tags_accepted, 17);
+    EXPECT_EQ(e.matched, 24);
+    EXPECT_LE(e.rms, 0.1);
+    EXPECT_LE(e.max, 0.2);
+    for (const TagRejection& r : result.rejected)
+      ADD_FAILURE() << "rejected " << r.tag_id << ": " << ToString(r.reason);
+  }
+  // Another dictionary's board in view: its markers decode as nothing of this board.
+  TargetConfig other = config;
+  other.dictionary = "DICT_5X5_50";
+  const cv::Mat image = renderer.Render(LookAt({0.25, 0.12, 0.55}, centre, 0.1), 6);
+  EXPECT_FALSE(Detector(Board(other)).Detect(image).board_found);
+}
+
 }  // namespace
 }  // namespace ctcal

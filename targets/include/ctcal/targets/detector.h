@@ -86,7 +86,7 @@ struct TagRejection {
 struct DetectionResult {
   bool board_found = false;             // a valid observation of the board (corners non-empty)
   std::vector<DetectedCorner> corners;  // sorted by id
-  int tags_detected = 0;                // tags decoded before the rules (AprilGrid)
+  int tags_detected = 0;  // tags (AprilGrid) or markers (ChArUco) decoded before the rules
   int tags_accepted = 0;
   std::vector<TagRejection> rejected;
   std::string error;  // set when the image could not be used at all (unreadable, empty)
@@ -123,6 +123,7 @@ class Detector {
   // noise_sigma: the image's noise (grey levels), for the corners' sigma.
   DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
+  DetectionResult DetectCharuco(const cv::Mat& gray, double noise_sigma) const;
   void AddModelError(DetectionResult* result) const;
 
   Board board_;
