@@ -91,7 +91,7 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
   // corners, except ChArUco's marker rules (ids not on the board, duplicates).
   const TargetType type = detector.board().type();
   const auto noun = [type](RejectReason reason) {
-    if (reason == RejectReason::kTooFewTags)
+    if (reason == RejectReason::kTooFewTags || reason == RejectReason::kNotThisBoard)
       return "views";
     if (type == TargetType::kAprilGrid)
       return "tags";
@@ -104,7 +104,7 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
     std::printf("  rejected: %zu %s (%s)\n", count, noun(reason), ToString(reason));
   if (with_board == 0) {
     std::string hint = "check the target file";
-    if (rejected.count(RejectReason::kUnknownId))
+    if (rejected.count(RejectReason::kUnknownId) || rejected.count(RejectReason::kNotThisBoard))
       hint = "ids beyond this board were seen: a larger board, or the wrong target file?";
     else if (rejected.count(RejectReason::kBadBorder))
       hint = "tags with another border width were seen: check blackTagBorder";

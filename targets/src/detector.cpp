@@ -37,6 +37,8 @@ const char* ToString(RejectReason reason) {
       return "too small to refine";
     case RejectReason::kOffEdges:
       return "a refined corner off the tag's edges";
+    case RejectReason::kNotThisBoard:
+      return "corners off this board's grid (another board size in view, or the wrong file?)";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -1059,6 +1061,15 @@ void Detector::AddModelError(DetectionResult* result) const {
   result->model_sigma_px = std::sqrt(model2);
   for (DetectedCorner& c : result->corners)
     c.sigma = std::max(options_.min_sigma_px, std::sqrt(c.sigma * c.sigma + model2));
+  // Corners that scatter by pixels about every row and column are not where this board's file
+  // puts them: a board of another size in view (Kalibr's sample grid read with a 6 x 6 file: 29
+  // tags, 38 px; with the right 8-column file 2.4 px), whose ids still decode. No observation
+  // rather than a wrong one.
+  if (result->grid_scatter_px > options_.max_grid_scatter_px) {
+    result->rejected.push_back({-1, RejectReason::kNotThisBoard});
+    result->corners.clear();
+    result->board_found = false;
+  }
 }
 
 DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "ctcal/targets/detector.h"
 
@@ -141,35 +142,65 @@ TEST(DetectReal, TumVi16BitFisheyeViews) {
 
 TEST(DetectReal, ColourPhotosOfGridsOnAMonitor) {
   SKIP_UNLESS_EXISTS(kAprilDir + "iphone.png");
-  // The grids on these photos are larger than 6x6: count every tag36h11 tag (2-bit border).
-  for (const auto& [name, tags] :
-       std::map<std::string, int>{{"iphone.png", 66}, {"two_boards.png", 72}}) {
+  // iphone.png shows an 11 x 6 grid (66 tags), two_boards.png two 6 x 6 grids with ids 0..71,
+  // i.e. one 6-column grid of 12 rows as far as positions go; the grid scatter tells the layout
+  // (other column counts scatter by 30-140 px).
+  for (const auto& [name, cols, rows, tags] : std::vector<std::tuple<std::string, int, int, int>>{
+           {"iphone.png", 11, 6, 66}, {"two_boards.png", 6, 12, 72}}) {
     const cv::Mat image = cv::imread(kAprilDir + name, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(image.channels(), 3) << name;
     TargetConfig big;
-    big.tag_rows = 12;
-    big.tag_cols = 6;
+    big.tag_rows = rows;
+    big.tag_cols = cols;
     const DetectionResult result = Detector(Board(big)).Detect(image);
     EXPECT_EQ(result.tags_detected, tags) << name;
     EXPECT_EQ(result.tags_accepted, tags) << name;
+    EXPECT_LT(result.grid_scatter_px, 0.15) << name;
   }
 }
 
-// A board of another size in view: the 6x6 file on the photo of a larger grid keeps tags 0..35
-// and reports every other id instead of mis-assigning it.
+// A board of another size in view: the 6 x 6 file on the photo of the 11 x 6 grid reports the ids
+// beyond its 36 tags, and refuses the view, since tags 0..35 sit elsewhere on an 11-column grid
+// than on a 6-column one (corners at the wrong board positions would poison a calibration).
 TEST(DetectReal, LargerBoardInViewReportsUnknownIds) {
   SKIP_UNLESS_EXISTS(kAprilDir + "iphone.png");
   const DetectionResult result = DetectFile(Detector(Euroc6x6()), kAprilDir + "iphone.png");
-  EXPECT_EQ(result.tags_accepted, 36);
-  int unknown = 0;
+  EXPECT_FALSE(result.board_found);
+  EXPECT_TRUE(result.corners.empty());
+  int unknown = 0, refused = 0;
   for (const TagRejection& r : result.rejected) {
-    EXPECT_EQ(r.reason, RejectReason::kUnknownId);
-    EXPECT_GE(r.tag_id, 36);
-    ++unknown;
+    if (r.reason == RejectReason::kUnknownId) {
+      EXPECT_GE(r.tag_id, 36);
+      ++unknown;
+    } else {
+      EXPECT_EQ(r.reason, RejectReason::kNotThisBoard);
+      ++refused;
+    }
   }
   EXPECT_EQ(unknown, 30);
-  for (const DetectedCorner& c : result.corners)
-    EXPECT_LT(c.id, 144);
+  EXPECT_EQ(refused, 1);
+}
+
+// Kalibr's sample images show a grid larger than 6 x 6 (ids up to 47). Read with a 6 x 6 file,
+// tags 0..35 still decode but sit elsewhere on that grid: the view must be refused, not turned
+// into corners at the wrong board positions.
+TEST(DetectReal, AnotherBoardSizeInViewIsRefused) {
+  for (const char* name :
+       {"kalibr_sampledata_img000100_0_0.png", "kalibr_sampledata_img000100_0_1.png"}) {
+    SKIP_UNLESS_EXISTS(kAprilDir + name);
+    const DetectionResult result = DetectFile(Detector(Euroc6x6()), kAprilDir + name);
+    EXPECT_FALSE(result.board_found) << name;
+    EXPECT_TRUE(result.corners.empty()) << name;
+    bool refused = false;
+    for (const TagRejection& r : result.rejected)
+      refused |= r.reason == RejectReason::kNotThisBoard;
+    EXPECT_TRUE(refused) << name;
+    // With the right file (8 columns; Kalibr's sample grid) the view is kept.
+    TargetConfig eight;
+    eight.tag_cols = 8;
+    eight.tag_rows = 6;
+    EXPECT_TRUE(DetectFile(Detector(Board(eight)), kAprilDir + name).board_found) << name;
+  }
 }
 
 std::vector<std::string> OpencvLeftImages() {

@@ -54,6 +54,10 @@ struct DetectorOptions {
   // 0.05 px, real EuRoC and TUM-VI views 0.04 px, docs/targets.md).
   int min_scatter_windows = 12;
   double default_model_sigma_px = 0.04;
+  // A view whose corners scatter about the board's grid by more than this (px) is not this board
+  // (rendered and real views with the right file: 0.02-2.8 px, Kalibr's blurred sample images
+  // the most; a grid read with a file of another column count: 11-140 px).
+  double max_grid_scatter_px = 5.0;
   // Reported when no refinement ran (px).
   double default_sigma_px = 0.5;
   // libapriltag's quad search on an image decimated by this factor (corners are then fitted at
@@ -75,6 +79,8 @@ enum class RejectReason {
   kTooSmall,        // fewer than min_bit_px pixels per bit: too small to refine its corners
   kOffEdges,        // a refined corner lies off the tag's own edges (max_edge_offset_px)
   kTooFewTags,      // the whole view: fewer than min_tags tags left
+  kNotThisBoard,    // the whole view: corners scatter about the grid by more than
+                    // max_grid_scatter_px (a board of another size in view)
 };
 const char* ToString(RejectReason reason);
 
