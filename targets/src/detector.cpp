@@ -522,7 +522,7 @@ TagEdgeFit FitTagEdges(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       fit.H(r, c) = Hcv.at<double>(r, c);
-  constexpr double kStep = 0.05;
+  constexpr double kStep = 0.1;
   constexpr int kSamples = 8;
   for (size_t k = 0; k < 4; ++k) {
     const Eigen::Vector2d a = cell[k], b = cell[(k + 1) % 4];
