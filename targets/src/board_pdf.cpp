@@ -74,8 +74,9 @@ void WriteBoardPdf(const Board& board, const std::string& path, const BoardPdfOp
     const TargetConfig& t = board.config();
     for (int j = 0; j < t.squares_y; ++j) {
       for (int i = 0; i < t.squares_x; ++i) {
-        // A black square, or the white square of a marker (drawn below).
-        if (board.IsBlack((i + 0.5) * t.square_length_m, (j + 0.5) * t.square_length_m))
+        // A black square, or a white one around a marker (drawn below): its margin tells.
+        const double margin = 0.25 * (t.square_length_m - t.marker_length_m);
+        if (board.IsBlack(i * t.square_length_m + margin, j * t.square_length_m + margin))
           cairo_rectangle(cr, i * t.square_length_m, j * t.square_length_m, t.square_length_m,
                           t.square_length_m);
       }
