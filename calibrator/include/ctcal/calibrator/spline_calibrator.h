@@ -61,6 +61,12 @@ struct SplineCalibratorOptions {
   int min_corners_per_view = 8;
   int min_views = 10;
   int max_rebucket_rounds = 3;
+  // The plain solves stop once a step would lower the cost F (1/2 sum of squared whitened
+  // residuals) by less than this. Near the optimum a Gauss-Newton step lands on it and lowers F by
+  // 1/2 |x - x*|^2 in the information metric, which bounds every scalar's distance to the
+  // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. 0: Ceres'
+  // relative tolerances of 1e-10 alone (the fully converged reference).
+  double stop_cost_change = 0.005;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.
