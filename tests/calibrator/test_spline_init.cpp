@@ -95,7 +95,7 @@ TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
 
   // The base IMU's samples with the truth's intrinsics and the simulator's biases (the ground
   // truth is stamped at the base IMU's samples).
-  const CalibrationState state(truth);
+  CalibrationState state(truth);
   const SensorState& base = *state.Find(truth.base_imu);
   std::map<std::int64_t, const GroundTruthState*> truth_at;
   for (const GroundTruthState& g : gt)
@@ -138,7 +138,7 @@ TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
   ASSERT_TRUE(truth.gravity_W.has_value());
   const double g_deg =
       std::acos(std::min(1.0, g_W.normalized().dot(truth.gravity_W->normalized()))) * 180.0 / M_PI;
-  EXPECT_LT(g_deg, 0.3);
+  EXPECT_LT(g_deg, 0.1);
   EXPECT_NEAR(g_W.norm(), truth.gravity_W->norm(), 0.05);
   std::printf(
       "trajectory fit: max rotation error %.3f deg, position %.2f mm, gravity %.3f deg, "
