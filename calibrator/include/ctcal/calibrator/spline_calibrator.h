@@ -4,8 +4,8 @@
 //
 // Stages, each separable so that a coarse-guess initialisation can replace the first one:
 //   1. initialise: board poses by PnP per camera frame, base poses T_W_B = T_W_C T_B_C^-1 at
-//      stamp + time_offset, the trajectory spline fitted to them, gravity from the
-//      accelerometers against the spline, biases 0 (spline_init.h);
+//      stamp + time_offset, the trajectory spline and gravity fitted to them and to the base
+//      IMU (spline_init.h, src/spline_trajectory_fit.h), biases seeded by the initialisation;
 //   2. robust solve (Huber on the whitened corner residuals);
 //   3. outliers removed (whitened corner residual beyond the chi-square gate), plain L2 solve,
 //      residuals re-bucketed onto the spline segment their time offsets now select, re-solved;
