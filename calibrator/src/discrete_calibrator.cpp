@@ -349,6 +349,12 @@ class DiscreteProblem {
     for (std::size_t k = 0; k < times.size(); ++k) {
       kf_[k].t = times[k];
       kf_[k].raw = RawAt(base_samples_, times[k]);
+      // d/dt of the raw readings' cubic (central difference: exact to O(eps^2) on a cubic).
+      const double eps = 1e-4;
+      const RawImuSample after = RawAt(base_samples_, times[k] + eps);
+      const RawImuSample before = RawAt(base_samples_, times[k] - eps);
+      kf_[k].raw_rate.w_m = (after.w_m - before.w_m) / (2.0 * eps);
+      kf_[k].raw_rate.a_m = (after.a_m - before.a_m) / (2.0 * eps);
     }
     log_(Fmt("  %.0f keyframes over %.3f s (mean spacing %.4f s)", static_cast<double>(kf_.size()),
              times.back() - times.front(),
@@ -399,7 +405,7 @@ class DiscreteProblem {
           if (p != nullptr)
             blocks.push_back(p);
         }
-        cost = discrete::ReintegrationFactor::Create(pre, intr);
+        cost = discrete::ReintegrationFactor::CreateSplit(pre, intr);
       } else {
         cost = discrete::PreintegrationFactor::Create(pre);
       }
@@ -456,7 +462,7 @@ class DiscreteProblem {
         auto pre = std::make_shared<Preintegration>(a->samples, tau_i, tau_j, *s.imu, noise,
                                                     Eigen::Vector3d(a->bg[k].data()),
                                                     Eigen::Vector3d(a->ba[k].data()));
-        cost = MakeDynamicAutoDiff(new AuxImuFunctor{pre, src_i, src_j, ix}, list.sizes(), 9);
+        cost = discrete::MakeSplitIntegration(AuxImuFunctor{pre, src_i, src_j, ix}, list, 9);
       } else {
         AuxGyroIndex ix;
         ix.model = s.gyro->model();
@@ -467,7 +473,7 @@ class DiscreteProblem {
         ix.bg = list.Add(a->bg[k].data(), 3);
         auto pre = std::make_shared<GyroPreintegration>(a->samples, tau_i, tau_j, *s.gyro, noise,
                                                         Eigen::Vector3d(a->bg[k].data()));
-        cost = MakeDynamicAutoDiff(new AuxGyroFunctor{pre, src_i, src_j, ix}, list.sizes(), 3);
+        cost = discrete::MakeSplitIntegration(AuxGyroFunctor{pre, src_i, src_j, ix}, list, 3);
       }
       ids.push_back(problem_->AddResidualBlock(cost, nullptr, list.blocks()));
       const double dt = tau_j - tau_i;
