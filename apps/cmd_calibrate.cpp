@@ -18,6 +18,7 @@
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
 #include "ctcal/calibrator/discrete/crosscheck.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
+#include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/kalibr_files.h"
@@ -150,7 +151,9 @@ int RunCalibrate(int argc, char** argv) {
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
                               "rig file with initial guesses (SPEC section 7)")(
-      "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
+      "data", po::value(&data_dir)->required(),
+      "dataset folder (SPEC section 6); a camera with images but no corners.csv is detected "
+      "first, its corners written to OUT/<camera>/corners.csv")(
       "out", po::value(&out_dir)->required(), "output folder")(
       "method", po::value(&method)->default_value("spline"),
       "spline, discrete (MVIS keyframes) or both (and a cross-check)")(
@@ -230,6 +233,11 @@ int RunCalibrate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.InputError(e.what());
   }
+  // Cameras given as images only are detected first; their corners go to OUT/<camera>/.
+  if (const auto failed = Guarded(cli, log_file, [&] {
+        DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log);
+      }))
+    return *failed;
 
   // The configuration of the run, for the report.
   report::RunInfo run_info = CalibrateRunInfo(argc, argv);

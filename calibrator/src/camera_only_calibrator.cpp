@@ -239,6 +239,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   const double half_period = 0.5 * Median(periods);
   // A frame's base time: its stamp plus the camera's given (not estimated) time offset, 0 for
   // hardware-synchronised cameras.
+  std::map<int, double> max_pair_gap_ns;  // per camera, over its paired frames
   auto pose_key = [&](int camera, std::int64_t stamp_ns) -> std::pair<int, std::int64_t> {
     if (camera == 0)
       return {0, stamp_ns};
@@ -255,8 +256,10 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       best = *std::prev(it);
       best_dt = static_cast<double>(t_ns - best);
     }
-    if (best_dt <= half_period)
+    if (best_dt <= half_period) {
+      max_pair_gap_ns[camera] = std::max(max_pair_gap_ns[camera], best_dt);
       return {0, best};
+    }
     return {camera, stamp_ns};  // seen without the reference camera: a pose of its own
   };
 
@@ -277,6 +280,16 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     }
   }
   result.poses = static_cast<int>(poses.size());
+  for (const auto& [c, gap_ns] : max_pair_gap_ns) {
+    if (gap_ns * 1e-9 > options.max_pair_gap_s) {
+      std::ostringstream why;
+      why << cams[static_cast<std::size_t>(c)]->config->name << ": frames paired with " << base.name
+          << "'s up to " << gap_ns * 1e-6
+          << " ms apart (stamp + time_offset): the cameras must expose at once for a shared board "
+             "pose; on a moving rig give their time_offset or synchronise them";
+      warn(why.str());
+    }
+  }
 
   std::vector<CornerTerm> terms;
   for (std::size_t c = 0; c < cams.size(); ++c) {

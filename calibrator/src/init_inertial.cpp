@@ -72,6 +72,30 @@ bool InterpolateCameraRotation(const std::vector<BoardView>& views, double max_g
   return true;
 }
 
+// Velocity of the camera centre at camera time t: the slope of a quadratic least-squares fit of
+// p_W_C over the views within `half_window` s of t; false with fewer than 4 such views.
+bool CameraVelocity(const std::vector<BoardView>& views, double t, double half_window,
+                    Eigen::Vector3d* v_W) {
+  Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d Atp = Eigen::Matrix3d::Zero();  // one column per coordinate
+  int n = 0;
+  for (const BoardView& view : views) {
+    const double dt = Seconds(view.t_ns) - t;
+    if (std::abs(dt) > half_window)
+      continue;
+    const Eigen::Vector3d p_W_C = view.T_C_W.inverse().translation();
+    const Eigen::Vector3d a(1.0, dt, dt * dt);
+    AtA += a * a.transpose();
+    Atp += a * p_W_C.transpose();
+    ++n;
+  }
+  if (n < 4)
+    return false;
+  const Eigen::Matrix3d coeffs = AtA.ldlt().solve(Atp);
+  *v_W = coeffs.row(1).transpose();
+  return v_W->allFinite();
+}
+
 double MedianFramePeriod(const std::vector<BoardView>& views) {
   std::vector<double> gaps;
   for (std::size_t k = 1; k < views.size(); ++k)
@@ -319,6 +343,15 @@ GravityResult InitGravity(const std::string& base_name, const std::vector<ImuSam
   }
   const double m = static_cast<double>(last - first);
   mean /= m;
+  // The mean of acc_W over the span is (v(t1) - v(t0)) / T, not zero: a hand-held wave ends at
+  // ~0.5 m/s, 0.04 m/s^2 or 0.25 deg of tilt over 12 s. The camera's velocity at both ends
+  // removes it (the lever arm's w x r is a few cm/s, under 0.02 deg here).
+  Eigen::Vector3d v0, v1;
+  const double half_window = 5.0 * MedianFramePeriod(views);
+  if (t[last - 1] > t[first] &&
+      CameraVelocity(views, t[first] - cam_time_offset, half_window, &v0) &&
+      CameraVelocity(views, t[last - 1] - cam_time_offset, half_window, &v1))
+    mean += (v1 - v0) / (t[last - 1] - t[first]);
   GravityResult result;
   result.samples = static_cast<int>(m);
   result.t0 = t[first];

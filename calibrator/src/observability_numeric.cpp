@@ -27,29 +27,30 @@ struct Reference {
 };
 constexpr Reference kReferences[] = {
     // inertial sensors (rotations in rad, translations in m, offsets in s)
-    {"imu.Dw", 1.5e-3},
-    {"imu.Da", 3.8e-3},
-    {"imu.Tg", 1.7e-4},  // (rad/s)/(m/s^2)
-    {"imu.R_I", 1.7e-3},
-    {"imu.R_B_S", 1.5e-3},
-    {"imu.t_B_S", 7.7e-4},
-    {"imu.time_offset", 3.2e-5},
-    {"gyro.Dw", 1.5e-3},
+    {"imu.Dw", 1.2e-3},
+    {"imu.Da", 1.8e-3},
+    {"imu.Tg", 8.4e-5},  // (rad/s)/(m/s^2)
+    {"imu.R_I", 1.4e-3},
+    {"imu.R_B_S", 8.7e-4},
+    {"imu.t_B_S", 6.1e-4},
+    {"imu.time_offset", 2.9e-5},
+    {"gyro.Dw", 1.2e-3},
     {"gyro.R_B_S", 1.2e-3},
-    {"gyro.time_offset", 3.7e-5},
+    {"gyro.time_offset", 3.4e-5},
     // cameras (px for focal length and principal point)
-    {"camera.focal", 0.8},
-    {"camera.principal", 0.79},
-    {"camera.radtan.distortion[0]", 2.0e-3},
-    {"camera.radtan.distortion[1]", 2.5e-3},
-    {"camera.radtan.distortion[2]", 2.1e-4},
-    {"camera.radtan.distortion[3]", 2.0e-4},
-    {"camera.equidistant.distortion[0]", 1.3e-2},
-    // equidistant k2..k4: undetermined on the default rig (the board never reaches cam1's outer
-    // field), so no reference.
-    {"camera.R_B_S", 2.9e-3},
-    {"camera.t_B_S", 2.3e-3},
-    {"camera.time_offset", 1.8e-4},
+    {"camera.focal", 0.72},
+    {"camera.principal", 0.76},
+    {"camera.radtan.distortion[0]", 1.1e-3},
+    {"camera.radtan.distortion[1]", 7.5e-4},
+    {"camera.radtan.distortion[2]", 1.5e-4},
+    {"camera.radtan.distortion[3]", 1.2e-4},
+    {"camera.equidistant.distortion[0]", 9.6e-3},
+    {"camera.equidistant.distortion[1]", 2.5e-2},
+    {"camera.equidistant.distortion[2]", 2.5e-2},
+    {"camera.equidistant.distortion[3]", 8.0e-3},
+    {"camera.R_B_S", 1.8e-3},
+    {"camera.t_B_S", 1.7e-3},
+    {"camera.time_offset", 1.7e-4},
     {"gravity_W.direction", 2.4e-3},
 };
 

@@ -134,6 +134,10 @@ TEST(CameraOnly, SimulatedStereoRigRecoversIntrinsicsAndExtrinsicsWithinSigma) {
     EXPECT_EQ(result.cameras.at(name).outliers, 0) << name;
   }
 
+  // Synchronised: no pairing warning.
+  for (const std::string& w : result.warnings)
+    EXPECT_EQ(w.find("apart"), std::string::npos) << w;
+
   const SensorConfig& cam1 = *result.rig.Find("cam1");
   const Eigen::Matrix3d R_est = cam1.T_B_S.topLeftCorner<3, 3>();
   const Eigen::Matrix3d R_true = truth.Find("cam1")->T_B_S.topLeftCorner<3, 3>();
@@ -163,6 +167,36 @@ TEST(CameraOnly, SimulatedStereoRigRecoversIntrinsicsAndExtrinsicsWithinSigma) {
   const RigConfig reread = LoadRig((out / "result.yaml").string());
   EXPECT_EQ(*reread.Find("cam1")->sigma.Find("t_B_S"), s_t);
   fs::remove_all(out);
+}
+
+// The same rig with its cameras at the simulator's random phases (not synchronised): SPEC's
+// pairing by the nearest stamp puts two exposures of a moving rig on one board pose, which no
+// intrinsics can fit. The calibrator says how far apart the paired frames are.
+TEST(CameraOnly, UnsynchronisedStereoIsWarnedAbout) {
+  const RigConfig truth = StereoTruth();
+  const auto motion = sim::MakeTrajectory(sim::Scenario::kFull, sim::SceneFor(truth.target));
+  const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(truth));
+  sim::SimOptions options;
+  options.seed = 7;
+  options.duration = 1.5;
+  const sim::SimulatedDataset sim = sim::Simulate(truth, traj, options);
+  const double gap_ms =
+      std::abs(std::remainder(static_cast<double>(Camera(sim, "cam0").frames_ns.front() -
+                                                  Camera(sim, "cam1").frames_ns.front()),
+                              1e9 / options.camera_rate_hz)) *
+      1e-6;
+  ASSERT_GT(gap_ms, 1.0) << "seed 7 happens to synchronise the cameras: pick another";
+  std::ostringstream log;
+  const CameraOnlyResult result = CalibrateCameraOnly(truth, ToSensorData(sim), {}, log);
+  std::string warning;
+  for (const std::string& w : result.warnings)
+    if (w.find("apart") != std::string::npos)
+      warning = w;
+  std::printf("stamps %.2f ms apart: %s\n", gap_ms, warning.c_str());
+  EXPECT_EQ(warning.rfind("cam1: frames paired with cam0's up to ", 0), 0) << log.str();
+  char expected[32];
+  std::snprintf(expected, sizeof expected, "%.2f", gap_ms);
+  EXPECT_NE(warning.find(std::string(expected).substr(0, 3)), std::string::npos) << warning;
 }
 
 TEST(CameraOnly, EurocStereoAgreesWithReferenceOrSaysIntrinsicsAreWeak) {

@@ -41,6 +41,10 @@ struct CameraOnlyOptions {
   // ... or the board's normals in the camera spanning less than this (median angle of the views
   // to their mean normal, deg): nearly alike views do not separate focal length from distance.
   double weak_view_spread_deg = 10.0;
+  // A camera whose frames are paired with the reference camera's more than this far apart
+  // (stamp + given time_offset, s) is warned about: one board pose per pair assumes both cameras
+  // exposed at once, which a moving rig with unsynchronised cameras violates.
+  double max_pair_gap_s = 1e-3;
 };
 
 struct CameraOnlyCameraReport {
