@@ -2,7 +2,7 @@
 // [--threads N]` (SPEC section 8): loads the rig and the dataset, runs the continuous-time
 // calibrator (calibrator/spline_calibrator.h), the discrete one (discrete_calibrator.h) or both
 // with a cross-check, and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and the report
-// (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h; spline method only).
+// (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h; every method).
 // `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml.
 #include <filesystem>
 #include <fstream>

@@ -11,7 +11,7 @@ PACKAGES=(
   libboost-program-options-dev libboost-math-dev
   libmrcal-dev mrcal
   libgtest-dev libgmock-dev libbenchmark-dev
-  libyaml-cpp-dev libcairo2-dev
+  libyaml-cpp-dev libcairo2-dev libpng-dev zlib1g-dev
   clang-format
   poppler-utils opencv-doc visp-images-data
   chromium

@@ -13,6 +13,7 @@
 
 #include "ctcal/calibrator/discrete/discrete_residuals.h"
 #include "ctcal/calibrator/discrete/frame_corners.h"
+#include "ctcal/calibrator/report_data_builder.h"
 #include "spline_problem_impl.h"
 
 namespace ctcal {
@@ -293,6 +294,39 @@ class DiscreteProblem {
                     *r.rms_whitened_gyro);
       log_(line);
     }
+    if (spline_options_.report_data)
+      out->report_data = ReportData(*out);
+  }
+
+  // The report's data (report_data_builder.h): poses as the corner residuals read them, the
+  // keyframe states' biases.
+  report::ReportData ReportData(const SplineCalibrationResult& out) {
+    std::vector<double> t;
+    std::vector<Eigen::Vector3d> bg, ba;
+    for (const Keyframe& k : kf_) {
+      t.push_back(k.t);
+      bg.emplace_back(k.b_g.data());
+      ba.emplace_back(k.b_a.data());
+    }
+    std::map<std::string, BiasEvaluator> bias;
+    bias[state_.base().name()] = KeyframeBiases(t, bg, ba, prep_.t0_ns, 0.0);
+    for (const AuxStates& a : aux_) {
+      std::vector<Eigen::Vector3d> abg, aba;
+      for (std::size_t k = 0; k < kf_.size(); ++k) {
+        abg.emplace_back(a.bg[k].data());
+        if (a.in->state->config.type == SensorType::kImu)
+          aba.emplace_back(a.ba[k].data());
+      }
+      bias[a.in->state->name()] =
+          KeyframeBiases(t, abg, aba, prep_.t0_ns, a.in->state->time_offset);
+    }
+    const auto slot = [this](double time) {
+      const CornerSlot s = SlotOf(time);
+      return KeyframeSlot{s.k, s.kinematic};
+    };
+    return spline_internal::SplineReportData(
+        prep_, KeyframeTrajectory(kf_, &*state_.base().imu, state_.gravity(), prep_.t0_ns, slot),
+        out, std::move(bias));
   }
 
  private:

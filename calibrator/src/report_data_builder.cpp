@@ -67,16 +67,36 @@ std::vector<report::CornerResidual> Corners(const SensorState& s,
   return rows;
 }
 
+// The sensor's biases at t_ns (own clock): the caller's evaluator, else the state's splines.
+struct Biases {
+  const SensorState& s;
+  const BiasEvaluator* override_ = nullptr;
+  void At(std::int64_t t_ns, Eigen::Vector3d* b_g, Eigen::Vector3d* b_a) const {
+    *b_g = Eigen::Vector3d::Zero();
+    *b_a = Eigen::Vector3d::Zero();
+    if (override_ != nullptr && *override_) {
+      (*override_)(t_ns, b_g, b_a);
+      return;
+    }
+    *b_g = s.bias_gyro.Evaluate(t_ns);
+    if (s.config.type == SensorType::kImu)
+      *b_a = s.bias_accel.Evaluate(t_ns);
+  }
+};
+
+const BiasEvaluator* BiasOverride(const ReportInputs& in, const std::string& name) {
+  const auto it = in.bias.find(name);
+  return it == in.bias.end() ? nullptr : &it->second;
+}
+
 // The random-walk envelope of the header, one row per `every` samples and at the last one.
 void AddBiasRow(const SensorState& s, std::int64_t t_ns, std::int64_t t_first,
-                report::BiasTrack* track) {
+                const Eigen::Vector3d& b_g, const Eigen::Vector3d& b_a, report::BiasTrack* track) {
   const double dt = 1e-9 * static_cast<double>(t_ns - t_first);
   const InertialNoise& n = s.config.noise;
-  track->gyro.push_back(
-      {t_ns, s.bias_gyro.Evaluate(t_ns), Eigen::Vector3d::Constant(n.GyroBiasSigma(dt))});
+  track->gyro.push_back({t_ns, b_g, Eigen::Vector3d::Constant(n.GyroBiasSigma(dt))});
   if (s.config.type == SensorType::kImu)
-    track->accel.push_back(
-        {t_ns, s.bias_accel.Evaluate(t_ns), Eigen::Vector3d::Constant(n.AccelBiasSigma(dt))});
+    track->accel.push_back({t_ns, b_a, Eigen::Vector3d::Constant(n.AccelBiasSigma(dt))});
 }
 
 template <class Sample>
@@ -85,7 +105,8 @@ bool BiasRowAt(const std::vector<Sample>& samples, std::size_t i, int every) {
 }
 
 void Imu(const CalibrationState& state, const SensorState& s, const std::vector<ImuSample>& samples,
-         const TrajectoryEvaluator& trajectory, int bias_every, report::ReportData* out) {
+         const TrajectoryEvaluator& trajectory, int bias_every, const Biases& biases,
+         report::ReportData* out) {
   const Eigen::Vector3d g_W = state.gravity();
   const Eigen::Matrix3d M = s.R_B_S().transpose();
   const Eigen::Vector3d r = s.p_B_S();
@@ -102,29 +123,32 @@ void Imu(const CalibrationState& state, const SensorState& s, const std::vector<
       w_S = M * kin.w_B;
       a_S = M * (f_B + kin.alpha_B.cross(r) + kin.w_B.cross(kin.w_B.cross(r)));
     }
-    Eigen::Vector3d w_pred, a_pred;
-    s.imu->RawFromTrue(w_S, a_S, s.bias_gyro.Evaluate(z.t_ns), s.bias_accel.Evaluate(z.t_ns),
-                       &w_pred, &a_pred);
+    Eigen::Vector3d b_g, b_a, w_pred, a_pred;
+    biases.At(z.t_ns, &b_g, &b_a);
+    s.imu->RawFromTrue(w_S, a_S, b_g, b_a, &w_pred, &a_pred);
     gyro.push_back({z.t_ns, z.w_m, w_pred});
     accel.push_back({z.t_ns, z.a_m, a_pred});
     if (BiasRowAt(samples, i, bias_every))
-      AddBiasRow(s, z.t_ns, samples.front().t_ns, &bias);
+      AddBiasRow(s, z.t_ns, samples.front().t_ns, b_g, b_a, &bias);
   }
 }
 
 void Gyro(const SensorState& s, const std::vector<GyroSample>& samples,
-          const TrajectoryEvaluator& trajectory, int bias_every, report::ReportData* out) {
+          const TrajectoryEvaluator& trajectory, int bias_every, const Biases& biases,
+          report::ReportData* out) {
   const Eigen::Matrix3d M = s.R_B_S().transpose();
   auto& gyro = out->gyro[s.name()];
   auto& bias = out->bias[s.name()];
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const GyroSample& z = samples[i];
     const Se3Kinematics<double> kin = trajectory(Shifted(z.t_ns, s.time_offset), 1);
-    const Eigen::Vector3d w_pred = GyroRawFromTrue<double>(
-        s.gyro->model(), s.gyro->Dw(), Eigen::Vector3d(M * kin.w_B), s.bias_gyro.Evaluate(z.t_ns));
+    Eigen::Vector3d b_g, b_a;
+    biases.At(z.t_ns, &b_g, &b_a);
+    const Eigen::Vector3d w_pred =
+        GyroRawFromTrue<double>(s.gyro->model(), s.gyro->Dw(), Eigen::Vector3d(M * kin.w_B), b_g);
     gyro.push_back({z.t_ns, z.w_m, w_pred});
     if (BiasRowAt(samples, i, bias_every))
-      AddBiasRow(s, z.t_ns, samples.front().t_ns, &bias);
+      AddBiasRow(s, z.t_ns, samples.front().t_ns, b_g, b_a, &bias);
   }
 }
 
@@ -181,14 +205,15 @@ report::ReportData BuildReportData(const CalibrationState& state, const ReportIn
     const SensorState& s = StateOf(state, name);
     if (!s.imu)
       throw std::runtime_error("report data: sensors." + name + " has IMU samples but is no IMU");
-    Imu(state, s, samples, trajectory, inputs.bias_every, &out);
+    Imu(state, s, samples, trajectory, inputs.bias_every, Biases{s, BiasOverride(inputs, name)},
+        &out);
   }
   for (const auto& [name, samples] : inputs.gyro) {
     const SensorState& s = StateOf(state, name);
     if (!s.gyro)
       throw std::runtime_error("report data: sensors." + name +
                                " has gyroscope samples but is no gyroscope");
-    Gyro(s, samples, trajectory, inputs.bias_every, &out);
+    Gyro(s, samples, trajectory, inputs.bias_every, Biases{s, BiasOverride(inputs, name)}, &out);
   }
   if (inputs.t1_ns > inputs.t0_ns && inputs.trajectory_rate_hz > 0.0) {
     const auto step = std::max<std::int64_t>(1, std::llround(1e9 / inputs.trajectory_rate_hz));

@@ -114,8 +114,10 @@ ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
 
 // The report data of the final values (report_data_builder.h), from the prepared data
 // (spline_report_data.cpp).
+// `bias` replaces the state's bias splines per sensor (the discrete method's keyframe biases).
 report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvaluator& trajectory,
-                                    const SplineCalibrationResult& result);
+                                    const SplineCalibrationResult& result,
+                                    std::map<std::string, BiasEvaluator> bias = {});
 
 // Prints each iteration's cost and time.
 class IterationLogger : public ceres::IterationCallback {

@@ -1,13 +1,15 @@
-// The spline calibrator's report data: the prepared data of the final solve (the corners with
-// their outlier flags, the inertial samples inside the trajectory) through the measurement models
-// of report_data_builder.h, and the correlation of the marginal covariance.
+// The spline and discrete calibrators' report data: the prepared data of the final solve (the
+// corners with their outlier flags, the inertial samples inside the trajectory) through the
+// measurement models of report_data_builder.h, and the correlation of the marginal covariance.
 #include "spline_problem_impl.h"
 
 namespace ctcal::spline_internal {
 
 report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvaluator& trajectory,
-                                    const SplineCalibrationResult& result) {
+                                    const SplineCalibrationResult& result,
+                                    std::map<std::string, BiasEvaluator> bias) {
   ReportInputs in;
+  in.bias = std::move(bias);
   in.t0_ns = prep.t0_ns;
   in.t1_ns = prep.t1_ns;
   for (const PreparedCamera& cam : prep.cameras) {

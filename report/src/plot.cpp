@@ -5,6 +5,7 @@
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
+#include <png.h>
 
 #include <Eigen/Geometry>
 
@@ -16,7 +17,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_set>
+#include <vector>
 
 namespace ctcal::report {
 namespace {
@@ -227,6 +228,133 @@ void Arrow(cairo_t* cr, double x0, double y0, double x1, double y1, double head)
   cairo_line_to(cr, x1 - h * std::cos(a - 0.45), y1 - h * std::sin(a - 0.45));
   cairo_line_to(cr, x1 - h * std::cos(a + 0.45), y1 - h * std::sin(a + 0.45));
   cairo_close_path(cr);
+  cairo_fill(cr);
+}
+
+// Dots stamped into an ARGB image over the plotted area `area` (device units), `scale` image
+// pixels per unit: an anti-aliased disc per dot, blended "over" in call order.
+class DotRaster {
+ public:
+  DotRaster(const Rect& area, double scale, double radius)
+      : area_(area),
+        scale_(scale),
+        w_(std::max(1, static_cast<int>(std::ceil(area.w * scale)))),
+        h_(std::max(1, static_cast<int>(std::ceil(area.h * scale)))) {
+    surface_ = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w_, h_);
+    cairo_surface_flush(surface_);
+    data_ = cairo_image_surface_get_data(surface_);
+    stride_ = cairo_image_surface_get_stride(surface_);
+    const double r = std::max(radius * scale, 0.5);
+    reach_ = static_cast<int>(std::ceil(r + 0.5));
+    const int side = 2 * reach_ + 1;
+    mask_.resize(static_cast<size_t>(side) * side);
+    for (int dy = -reach_; dy <= reach_; ++dy) {
+      for (int dx = -reach_; dx <= reach_; ++dx) {
+        mask_[static_cast<size_t>(dy + reach_) * side + (dx + reach_)] = static_cast<std::uint8_t>(
+            255.0 * std::clamp(r + 0.5 - std::hypot(dx, dy), 0.0, 1.0) + 0.5);
+      }
+    }
+  }
+  ~DotRaster() { cairo_surface_destroy(surface_); }
+  DotRaster(const DotRaster&) = delete;
+  DotRaster& operator=(const DotRaster&) = delete;
+
+  void Stamp(double x, double y, const Color& c) {
+    if (data_ == nullptr)
+      return;
+    const int cx = static_cast<int>((x - area_.x) * scale_ + 0.5);
+    const int cy = static_cast<int>((y - area_.y) * scale_ + 0.5);
+    const int side = 2 * reach_ + 1;
+    const auto channel = [](double v) {
+      return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+    };
+    const std::uint32_t alpha = channel(c.a), r = channel(c.r), g = channel(c.g), b = channel(c.b);
+    for (int dy = -reach_; dy <= reach_; ++dy) {
+      const int py = cy + dy;
+      if (py < 0 || py >= h_)
+        continue;
+      auto* row = reinterpret_cast<std::uint32_t*>(data_ + static_cast<size_t>(py) * stride_);
+      const std::uint8_t* m = &mask_[static_cast<size_t>(dy + reach_) * side];
+      for (int dx = -reach_; dx <= reach_; ++dx) {
+        const int px = cx + dx;
+        const std::uint32_t a = (alpha * m[dx + reach_] + 127) / 255;
+        if (px < 0 || px >= w_ || a == 0)
+          continue;
+        // Premultiplied ARGB32 "over": out = src a + (1 - a) dst, per 8-bit channel.
+        const std::uint32_t d = row[px];
+        const auto over = [&](int shift, std::uint32_t src) {
+          return ((src * a + ((d >> shift) & 0xffu) * (255u - a) + 127u) / 255u) << shift;
+        };
+        row[px] = over(24, 255u) | over(16, r) | over(8, g) | over(0, b);
+      }
+    }
+  }
+
+  void PaintOnto(cairo_t* cr) {
+    cairo_surface_mark_dirty(surface_);
+    cairo_save(cr);
+    cairo_translate(cr, area_.x, area_.y);
+    cairo_scale(cr, 1.0 / scale_, 1.0 / scale_);
+    cairo_set_source_surface(cr, surface_, 0.0, 0.0);
+    cairo_paint(cr);
+    cairo_restore(cr);
+  }
+
+ private:
+  Rect area_;
+  double scale_;
+  int w_, h_;
+  cairo_surface_t* surface_ = nullptr;
+  unsigned char* data_ = nullptr;
+  int stride_ = 0;
+  int reach_ = 0;
+  std::vector<std::uint8_t> mask_;  // disc coverage, 0..255
+};
+
+// A line of many more points than half-points across (XYPlot::Draw): per half-point column one
+// bar from the lowest to the highest point, reaching back to the previous column's last point
+// so that the line stays connected; `width` thick like the stroke. NaN breaks the line.
+template <typename AxesT>
+void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
+                   const std::vector<double>& y, double width) {
+  const size_t n = std::min(x.size(), y.size());
+  const double half = 0.5 * width;
+  bool open = false, have_prev = false;
+  double column = 0.0, lo = 0.0, hi = 0.0, last = 0.0, prev_last = 0.0;
+  const auto flush = [&]() {
+    if (!open)
+      return;
+    double top = lo, bottom = hi;
+    if (have_prev) {
+      top = std::min(top, prev_last);
+      bottom = std::max(bottom, prev_last);
+    }
+    cairo_rectangle(cr, 0.5 * column - half * 0.5, top - half, 0.5 + half, bottom - top + width);
+    prev_last = last;
+    have_prev = true;
+    open = false;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
+      flush();
+      have_prev = false;
+      continue;
+    }
+    const double dx = ax.X(x[i]), dy = ax.Y(y[i]);
+    const double c = std::floor(2.0 * dx);
+    if (open && c != column)
+      flush();
+    if (!open) {
+      open = true;
+      column = c;
+      lo = hi = last = dy;
+      continue;
+    }
+    lo = std::min(lo, dy);
+    hi = std::max(hi, dy);
+    last = dy;
+  }
+  flush();
   cairo_fill(cr);
 }
 
@@ -474,98 +602,61 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
             cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           pen = true;
         };
-        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as each half-point
-        // column's first, lowest, highest and last point: the same picture (spikes kept) at a
-        // fraction of the path, so that the PDF stays small and fast to view.
+        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as one filled bar
+        // per half-point column from its lowest to its highest point, joined to the previous
+        // column's last point: the picture of the stroke (spikes kept) without stroking
+        // thousands of overlapping zigzag segments, which cost cairo ~1 s per PNG.
         const bool thin = s.kind == Series::Kind::kLine && static_cast<double>(n) > 4 * p.w;
-        size_t first = n, lo = n, hi = n, last = n;
-        double column = 0.0;
-        const auto flush = [&]() {
-          if (first == n)
-            return;
-          std::array<size_t, 4> idx{first, std::min(lo, hi), std::max(lo, hi), last};
-          for (size_t k = 0; k < idx.size(); ++k) {
-            if (k == 0 || idx[k] != idx[k - 1])
-              point(idx[k]);
-          }
-          first = n;
-        };
+        if (thin) {
+          DrawDenseLine(cr, ax, s.x, s.y, s.width);
+          break;
+        }
         for (size_t i = 0; i < n; ++i) {
           if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-            flush();
             pen = false;
             continue;
           }
-          if (!thin) {
-            point(i);
-            continue;
-          }
-          const double c = std::floor(2.0 * ax.X(s.x[i]));
-          if (first != n && c != column)
-            flush();
-          if (first == n) {
-            first = lo = hi = last = i;
-            column = c;
-            continue;
-          }
-          last = i;
-          if (s.y[i] < s.y[lo])
-            lo = i;
-          if (s.y[i] > s.y[hi])
-            hi = i;
+          point(i);
         }
-        flush();
         cairo_stroke(cr);
         break;
       }
       case Series::Kind::kScatter: {
-        // A dot on (nearly) the spot of an earlier dot of the same colour adds nothing to the
-        // picture but bytes: 100k+ corners of a minute's recording pile up in the centre.
-        // Beyond kRasterDots dots a vector page is still tens of MB and slow to open: the dots
-        // are drawn into an image at kRasterScale px per pt instead (same look, a fixed size).
-        constexpr size_t kRasterDots = 20000;
-        constexpr double kRasterScale = 3.0;
-        cairo_t* const page = cr;
-        cairo_surface_t* image = nullptr;
-        if (n > kRasterDots) {
-          image = cairo_image_surface_create(CAIRO_FORMAT_ARGB32,
-                                             static_cast<int>(std::ceil(p.w * kRasterScale)),
-                                             static_cast<int>(std::ceil(p.h * kRasterScale)));
-          cr = cairo_create(image);
-          cairo_scale(cr, kRasterScale, kRasterScale);
-          cairo_translate(cr, -p.x, -p.y);
-        }
-        std::unordered_set<std::uint64_t> drawn;
-        const double cell = std::max(0.25 * s.width, 0.1);
-        for (size_t i = 0; i < n; ++i) {
-          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
-            continue;
-          const double u = (i < s.value.size() && vh > vl) ? (s.value[i] - vl) / (vh - vl) : 0.5;
-          const auto cx =
-              static_cast<std::uint64_t>(std::clamp(ax.X(s.x[i]) / cell + 1e5, 0.0, 2e5));
-          const auto cy =
-              static_cast<std::uint64_t>(std::clamp(ax.Y(s.y[i]) / cell + 1e5, 0.0, 2e5));
-          const auto shade = static_cast<std::uint64_t>(std::clamp(u, 0.0, 1.0) * 63.0);
-          if (!drawn.insert((cx << 32) | (cy << 8) | shade).second)
-            continue;
+        // Up to kVectorDots dots are vector circles. Beyond, cairo's per-dot fill (a minute's
+        // recording has 170k corners per camera: 3.5 s per drawing) is replaced by stamping an
+        // anti-aliased disc into an image (the PNG's pixels, 2.5 px per pt on a PDF page), later
+        // dots over earlier ones as the vector path would draw them (same look, ~50 ms, a fixed
+        // size in the PDF).
+        constexpr size_t kVectorDots = 3000;
+        const auto color_of = [&](size_t i) {
           Color c = s.color;
           if (i < s.value.size())
             c = Viridis(vh > vl ? (s.value[i] - vl) / (vh - vl) : 0.5);
           c.a = s.color.a;
-          SetColor(cr, c);
+          return c;
+        };
+        if (n > kVectorDots) {
+          // Image targets: their own resolution; vector pages: 2.5 px per pt (180 dpi).
+          double scale = 2.5;
+          if (cairo_surface_get_type(cairo_get_target(cr)) == CAIRO_SURFACE_TYPE_IMAGE) {
+            double ux = 1.0, uy = 0.0;
+            cairo_user_to_device_distance(cr, &ux, &uy);
+            scale = std::max(std::hypot(ux, uy), 0.5);
+          }
+          DotRaster raster(p, scale, s.width);
+          for (size_t i = 0; i < n; ++i) {
+            if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
+              raster.Stamp(ax.X(s.x[i]), ax.Y(s.y[i]), color_of(i));
+          }
+          raster.PaintOnto(cr);
+          break;
+        }
+        for (size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
+            continue;
+          SetColor(cr, color_of(i));
           cairo_arc(cr, ax.X(s.x[i]), ax.Y(s.y[i]), s.width, 0, 2 * M_PI);
           cairo_fill(cr);
-        }
-        if (image != nullptr) {
-          cairo_destroy(cr);
-          cr = page;
-          cairo_save(cr);
-          cairo_translate(cr, p.x, p.y);
-          cairo_scale(cr, 1.0 / kRasterScale, 1.0 / kRasterScale);
-          cairo_set_source_surface(cr, image, 0.0, 0.0);
-          cairo_paint(cr);
-          cairo_restore(cr);
-          cairo_surface_destroy(image);
         }
         break;
       }
@@ -776,15 +867,33 @@ void Table::Draw(void* cairo, const Rect& area) const {
     cols = std::max(cols, r.size());
   // Column widths from the content, scaled down to fit.
   std::vector<double> w(cols, 0.0);
-  for (size_t r = 0; r < rows.size(); ++r) {
-    for (size_t c = 0; c < rows[r].size(); ++c) {
-      SetFont(cr, font_size, r == 0, rows[r][c].monospace);
-      w[c] = std::max(w[c], TextWidth(cr, rows[r][c].text) + 12);
+  double total = 0;
+  const auto measure = [&](double size) {
+    std::fill(w.begin(), w.end(), 0.0);
+    for (size_t r = 0; r < rows.size(); ++r) {
+      for (size_t c = 0; c < rows[r].size(); ++c) {
+        SetFont(cr, size, r == 0, rows[r][c].monospace);
+        w[c] = std::max(w[c], TextWidth(cr, rows[r][c].text) + 12);
+      }
+    }
+    total = 0;
+    for (const double x : w)
+      total += x;
+  };
+  double fs = font_size;
+  measure(fs);
+  if (min_font_size > 0.0) {
+    // Text width scales with the font size, the 12 pt of padding per column does not.
+    const double pad = 12.0 * static_cast<double>(cols);
+    const double by_width =
+        total > p.w ? 0.97 * fs * (p.w - pad) / std::max(total - pad, 1e-9) : fs;
+    const double by_height = p.h / (1.65 * static_cast<double>(rows.size()));
+    const double fitted = std::max(min_font_size, std::min({fs, by_width, by_height}));
+    if (fitted < fs) {
+      fs = fitted;
+      measure(fs);
     }
   }
-  double total = 0;
-  for (const double x : w)
-    total += x;
   if (total > p.w) {
     // Too wide: cap the widest columns at one common width, so that narrow ones (status,
     // sensor) stay whole and only long text is cut.
@@ -804,7 +913,7 @@ void Table::Draw(void* cairo, const Rect& area) const {
     total = p.w;
   }
   const double scale = 1.0;
-  const double rh = font_size * 1.65;
+  const double rh = fs * 1.65;
   double y = p.y;
   for (size_t r = 0; r < rows.size() && y + rh <= p.y + p.h + 0.5; ++r) {
     double x = p.x;
@@ -828,7 +937,7 @@ void Table::Draw(void* cairo, const Rect& area) const {
       } else {
         cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
       }
-      SetFont(cr, font_size, r == 0 || cell.has_fill, cell.monospace);
+      SetFont(cr, fs, r == 0 || cell.has_fill, cell.monospace);
       Text(cr, Fit(cr, cell.text, cw - 8), x + 5, y + rh / 2, 0.0, 0.5);
       x += cw;
     }
@@ -1055,10 +1164,24 @@ void MatrixPlot::Draw(void* cairo, const Rect& area) const {
 void TextPanel::Draw(void* cairo, const Rect& area) const {
   cairo_t* cr = Cr(cairo);
   PanelTitle(cr, title, area);
-  SetFont(cr, font_size, false, monospace);
-  cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+  double fs = font_size;
   double y = area.y + (title.empty() ? 4 : 24);
-  const double lh = font_size * 1.45;
+  if (min_font_size > 0.0 && !lines.empty()) {
+    // Monospace blocks (code to paste) must not wrap or be cut: shrink to the widest line and
+    // to the height.
+    SetFont(cr, fs, false, monospace);
+    double widest = 0.0;
+    for (const std::string& line : lines)
+      widest = std::max(widest, TextWidth(cr, line));
+    // 3 % margin: hinted glyph advances do not scale exactly with the size.
+    const double by_width =
+        monospace && widest > area.w - 8 ? 0.97 * fs * (area.w - 8) / widest : fs;
+    const double by_height = (area.y + area.h - y) / (1.45 * static_cast<double>(lines.size()));
+    fs = std::max(min_font_size, std::min({fs, by_width, by_height}));
+  }
+  SetFont(cr, fs, false, monospace);
+  cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+  const double lh = fs * 1.45;
   for (const std::string& line : lines) {
     // Greedy word wrap (monospace blocks are not wrapped, only cut).
     std::istringstream words(line);
@@ -1165,14 +1288,71 @@ cairo_surface_t* DrawImage(const Figure& figure, double scale) {
 
 }  // namespace
 
+namespace {
+
+void PngAppend(png_structp png, png_bytep data, png_size_t length) {
+  static_cast<std::string*>(png_get_io_ptr(png))
+      ->append(reinterpret_cast<const char*>(data), length);
+}
+
+[[noreturn]] void PngFail(png_structp png, png_const_charp message) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
+  png_longjmp(png, 1);
+}
+
+// 8-bit RGB PNG of an RGB24 surface. cairo's own writer uses zlib's default level 6, ~40 % of
+// the report's rendering time; level 2 with the "up" filter costs a quarter of that for files
+// ~15 % larger (plots are mostly flat colour).
+std::string EncodePng(cairo_surface_t* surface) {
+  const int w = cairo_image_surface_get_width(surface);
+  const int h = cairo_image_surface_get_height(surface);
+  const int stride = cairo_image_surface_get_stride(surface);
+  const unsigned char* data = cairo_image_surface_get_data(surface);
+  std::string bytes, error;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngFail, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("PNG encoding failed: out of memory");
+  }
+  std::vector<png_byte> row(static_cast<size_t>(w) * 3);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("PNG encoding failed: " + error);
+  }
+  png_set_write_fn(png, &bytes, PngAppend, nullptr);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), 8,
+               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, 2);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
+  png_write_info(png, info);
+  for (int y = 0; y < h; ++y) {
+    const auto* px = reinterpret_cast<const std::uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < w; ++x) {
+      row[3 * x] = static_cast<png_byte>((px[x] >> 16) & 0xffu);
+      row[3 * x + 1] = static_cast<png_byte>((px[x] >> 8) & 0xffu);
+      row[3 * x + 2] = static_cast<png_byte>(px[x] & 0xffu);
+    }
+    png_write_row(png, row.data());
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return bytes;
+}
+
+}  // namespace
+
 std::string RenderPng(const Figure& figure, double scale) {
   cairo_surface_t* surface = DrawImage(figure, scale);
-  std::string bytes;
-  const cairo_status_t st = cairo_surface_write_to_png_stream(surface, AppendToString, &bytes);
-  cairo_surface_destroy(surface);
-  if (st != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error(std::string("PNG encoding failed: ") + cairo_status_to_string(st));
-  return bytes;
+  try {
+    std::string bytes = EncodePng(surface);
+    cairo_surface_destroy(surface);
+    return bytes;
+  } catch (...) {
+    cairo_surface_destroy(surface);
+    throw;
+  }
 }
 
 void SavePng(const Figure& figure, const std::string& path, double scale) {

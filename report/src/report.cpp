@@ -7,17 +7,20 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
+#include "ctcal/report/distortion_field.h"
 #include "ctcal/report/plot.h"
-#include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -28,6 +31,10 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPageW = 842.0, kPageH = 595.0;  // A4 landscape, pt
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPngScale = 1.25;
+// The first page's grid: checks on top, parameters (left) and Kalibr lines (right) below.
+constexpr int kSummaryRows = 24, kSummaryCols = 20,
+              kSummaryParamCols = 13;  // PNG pixels per pt: the HTML's figures, --png-dir
 
 std::string Escape(const std::string& s) {
   std::string o;
@@ -133,6 +140,32 @@ std::string Units(const ScalarParameter& p, const RigConfig& rig) {
   return "-";
 }
 
+// "v +- s" with the sigma to 2 significant digits and the value to the same decimals, a common
+// power of ten factored out for very small or large numbers: "458.652 +- 0.021",
+// "(1.23 +- 0.45)e-04". Without a sigma: the value to 6 digits; sigma .inf: "+- inf".
+std::string ValueSigma(double v, const std::optional<double>& sigma) {
+  if (!std::isfinite(v))
+    return FormatNumber(v);
+  if (!sigma || !(*sigma > 0.0))
+    return FormatNumber(v, 6);
+  if (!std::isfinite(*sigma))
+    return FormatNumber(v, 6) + " +- inf";
+  const double mag = std::max(std::abs(v), *sigma);
+  int e = 0;
+  if (mag < 1e-3 || mag >= 1e5)
+    e = static_cast<int>(std::floor(std::log10(mag)));
+  const double scale = std::pow(10.0, -e);
+  const int decimals =
+      std::clamp(1 - static_cast<int>(std::floor(std::log10(*sigma * scale))), 0, 9);
+  char buf[96];
+  if (e == 0)
+    std::snprintf(buf, sizeof buf, "%.*f +- %.*f", decimals, v, decimals, *sigma);
+  else
+    std::snprintf(buf, sizeof buf, "(%.*f +- %.*f)e%+03d", decimals, v * scale, decimals,
+                  *sigma * scale, e);
+  return buf;
+}
+
 // ------------------------------------------------------------------------------ the document
 
 // One section: HTML body parts and PDF figures in order.
@@ -226,6 +259,9 @@ class Builder {
     }
   }
 
+  // The first page (issue 10), what a factory engineer reads in ten seconds: the verdict and
+  // every check, every calibrated quantity with its 1-sigma in engineering units, and the Kalibr
+  // transformations and time shifts ready to paste.
   Section Summary(const std::vector<Check>& checks) {
     Section sec("sec-summary", "Summary: pass / warn / fail");
     std::ostringstream h;
@@ -235,13 +271,18 @@ class Builder {
       warns += c.status == Status::kWarn;
     }
     const Status overall = fails ? Status::kFail : warns ? Status::kWarn : Status::kPass;
+    const std::string verdict = ToString(overall) + ": " + std::to_string(fails) + " failed, " +
+                                std::to_string(warns) + " warnings, " +
+                                std::to_string(checks.size()) + " checks";
     h << "<p class=\"verdict\" style=\"background:" << CssColor(StatusColor(overall)) << "\">"
-      << ToString(overall) << ": " << fails << " failed, " << warns << " warnings, "
-      << checks.size() << " checks</p>\n<table class=\"checks\"><tr><th>status</th><th>check</th>"
+      << verdict << "</p>\n<table class=\"checks\"><tr><th>status</th><th>check</th>"
       << "<th>sensor</th><th>value</th><th>criterion</th></tr>";
-    auto fig = NewFigure("fig-summary", "Calibration summary", 1, 1);
+    auto fig = std::make_shared<Figure>(kSummaryRows, kSummaryCols, kPageW, kPageH);
+    fig->id = "fig-summary";
+    fig->title = "Calibration summary: " + verdict;
     auto& t = fig->Add<Table>();
-    t.font_size = 11;
+    t.font_size = 9;
+    t.min_font_size = 5.5;
     t.AddRow({"status", "check", "sensor", "value", "criterion"});
     for (const Check& c : checks) {
       h << "<tr><td class=\"status\" style=\"background:" << CssColor(StatusColor(c.status))
@@ -253,11 +294,152 @@ class Builder {
       t.rows.back()[0].fill = StatusColor(c.status);
     }
     h << "</table>\n";
-    fig->title = "Calibration summary: " + ToString(overall) + " (" + std::to_string(fails) +
-                 " failed, " + std::to_string(warns) + " warnings)";
+    // The checks take the rows they need (9 pt rows of 1.65 em, a little for the frame).
+    const double cell_h = (kPageH - 36.0) / kSummaryRows;
+    const int check_rows =
+        std::clamp(static_cast<int>(std::ceil((1.65 * 9.0 * (checks.size() + 1) + 8.0) / cell_h)),
+                   3, kSummaryRows / 2);
+    fig->SetSpan(0, check_rows, kSummaryCols);
+
+    const std::vector<std::vector<std::string>> params = ParameterSummaryRows();
+    auto& pt = fig->Add<Table>();
+    pt.title = "calibrated parameters (value +- 1 sigma)";
+    pt.font_size = 8;
+    pt.min_font_size = 5.5;
+    for (const auto& r : params)
+      pt.AddRow(r);
+    fig->SetSpan(1, kSummaryRows - check_rows, kSummaryParamCols);
+    if (params.size() > 1) {
+      h << "<h3>Calibrated parameters (value &plusmn; 1 sigma; every scalar in "
+        << "<a href=\"#sec-parameters\">the parameter table</a>)</h3>"
+        << HtmlTable(params, "params");
+    }
+
+    const std::vector<std::string> kalibr = KalibrPasteLines();
+    auto& kt = fig->Add<TextPanel>();
+    kt.title = "Kalibr (camchain-imucam.yaml / imu.yaml)";
+    kt.monospace = true;
+    kt.font_size = 7.5;
+    kt.min_font_size = 4.5;
+    kt.lines = kalibr.empty() ? std::vector<std::string>{"(no Kalibr transformation)"} : kalibr;
+    fig->SetSpan(2, kSummaryRows - check_rows, kSummaryCols - kSummaryParamCols);
+    if (!kalibr.empty()) {
+      std::string text;
+      for (const auto& l : kalibr)
+        text += l + "\n";
+      h << "<h3>Kalibr transformations and time shifts, ready to paste (the whole files in "
+        << "<a href=\"#sec-kalibr\">Kalibr files</a>)</h3><pre class=\"paste\">" << Escape(text)
+        << "</pre>\n";
+    }
     sec.html = h.str();
     sec.figures.push_back(fig);
     return sec;
+  }
+
+  // One row per calibrated quantity (sensor and key): its components as value +- sigma, in the
+  // units an engineer checks them in: rotations (components of Log R) in deg, lever arms in mm,
+  // time offsets in ms, line delays in us per row.
+  std::vector<std::vector<std::string>> ParameterSummaryRows() const {
+    struct Group {
+      std::string sensor, key, units;
+      std::vector<std::string> cells;
+    };
+    std::vector<Group> groups;
+    for (const ScalarParameter& p : ScalarParameters(rig_, true)) {
+      double v = kNaN;
+      try {
+        v = ParameterValue(rig_, p);
+      } catch (const std::exception&) {  // e.g. gravity_W absent from an input-like file
+      }
+      const std::optional<double> sigma = ParameterSigma(rig_, p);
+      double factor = 1.0;
+      std::string units = Units(p, rig_);
+      if (p.rotation) {
+        factor = 180.0 / M_PI;
+        units = "deg";
+      } else if (p.key == "t_B_S") {
+        factor = 1e3;
+        units = "mm";
+      } else if (p.key == "time_offset") {
+        factor = 1e3;
+        units = "ms";
+      } else if (p.key == "line_delay") {
+        factor = 1e6;
+        units = "us/row";
+      }
+      if (groups.empty() || groups.back().sensor != p.sensor || groups.back().key != p.key)
+        groups.push_back({p.sensor, p.key, units, {}});
+      groups.back().cells.push_back(
+          ValueSigma(factor * v, sigma ? std::optional<double>(factor * *sigma) : std::nullopt));
+    }
+    // At most 4 components a line (a 3x3 matrix: its rows), continuation lines unlabelled.
+    std::vector<std::vector<std::string>> rows = {
+        {"sensor", "quantity", "units", "value +- 1 sigma"}};
+    for (const Group& g : groups) {
+      const std::size_t per = g.cells.size() == 9 ? 3 : 4;
+      for (std::size_t i = 0; i < g.cells.size(); i += per) {
+        std::string line;
+        for (std::size_t k = i; k < std::min(g.cells.size(), i + per); ++k)
+          line += (k > i ? ",  " : "") + g.cells[k];
+        rows.push_back({i                  ? ""
+                        : g.sensor.empty() ? "rig"
+                                           : g.sensor,
+                        i ? "" : g.key, i ? "" : g.units, line});
+      }
+    }
+    return rows;
+  }
+
+  // Kalibr's T_cam_imu and timeshift_cam_imu per camera, T_i_b and time_offset per auxiliary
+  // IMU, as YAML lines of the files EmitKalibrCamchain / EmitKalibrImu write (kalibr_files.h).
+  std::vector<std::string> KalibrPasteLines() const {
+    std::vector<std::string> lines;
+    const auto matrix = [&](const YAML::Node& m) {
+      for (const auto& row : m) {
+        std::string l = "    - [";
+        for (std::size_t i = 0; i < row.size(); ++i) {
+          char buf[32];
+          std::snprintf(buf, sizeof buf, "%s%.9f", i ? ", " : "", row[i].as<double>());
+          l += buf;
+        }
+        lines.push_back(l + "]");
+      }
+    };
+    const auto scalar = [](const char* key, double x) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "  %s: %.9f", key, x);
+      return std::string(buf);
+    };
+    try {
+      if (rig_.IsCameraOnly())
+        return lines;
+      const YAML::Node cams = YAML::Load(EmitKalibrCamchain(rig_));
+      for (const auto& kv : cams) {
+        if (!kv.second["T_cam_imu"])
+          continue;
+        lines.push_back(kv.first.as<std::string>() + ":");
+        lines.push_back("  T_cam_imu:");
+        matrix(kv.second["T_cam_imu"]);
+        if (kv.second["timeshift_cam_imu"])
+          lines.push_back(scalar("timeshift_cam_imu", kv.second["timeshift_cam_imu"].as<double>()));
+      }
+      const YAML::Node imus = YAML::Load(EmitKalibrImu(rig_));
+      bool first = true;
+      for (const auto& kv : imus) {
+        if (first || !kv.second["T_i_b"]) {  // the base IMU: identity, offset 0
+          first = false;
+          continue;
+        }
+        lines.push_back(kv.first.as<std::string>() + ":");
+        lines.push_back("  T_i_b:");
+        matrix(kv.second["T_i_b"]);
+        if (kv.second["time_offset"])
+          lines.push_back(scalar("time_offset", kv.second["time_offset"].as<double>()));
+      }
+    } catch (const std::exception& e) {
+      return {std::string("(not available: ") + e.what() + ")"};
+    }
+    return lines;
   }
 
   Section Parameters() {
@@ -473,6 +655,64 @@ class Builder {
     return sec;
   }
 
+  // Distortion field (distortion_field.h): arrows from the reference lens's pixel to the model's
+  // pixel of the same ray, and the displacement's magnitude over the image.
+  void DistortionFigure(Section* sec, const SensorConfig& s) const {
+    DistortionField d;
+    try {
+      d = ComputeDistortionField(s);
+    } catch (const std::exception& e) {
+      sec->html += "<p class=\"note\">distortion field not drawn: " + Escape(e.what()) + "</p>\n";
+      return;
+    }
+    if (d.model_uv.empty()) {
+      sec->html += "<p class=\"note\">no distortion field: " + s.camera_model + " with " +
+                   s.distortion_model + " distortion is the ideal pinhole.</p>\n";
+      return;
+    }
+    const double W = s.width, H = s.height;
+    // Arrows scaled so that the longest spans a grid cell; the scale is in the title.
+    const double scale = d.max_magnitude > 0 ? (W / 16.0) / d.max_magnitude : 1.0;
+    std::vector<double> x0, y0, dx, dy;
+    for (std::size_t i = 0; i < d.model_uv.size(); ++i) {
+      x0.push_back(d.reference_uv[i].x());
+      y0.push_back(d.reference_uv[i].y());
+      dx.push_back(scale * (d.model_uv[i].x() - d.reference_uv[i].x()));
+      dy.push_back(scale * (d.model_uv[i].y() - d.reference_uv[i].y()));
+    }
+    auto f = NewFigure("fig-" + s.name + "-distortion",
+                       s.name + ": distortion field vs " + d.reference + ", max " +
+                           FormatNumber(d.max_magnitude, 3) + " px",
+                       1, 2);
+    auto& p = f->Add<XYPlot>();
+    p.title = "reference -> model pixel, arrows x" + FormatNumber(scale, 3);
+    p.x_label = "u [px]";
+    p.y_label = "v [px]";
+    p.equal_aspect = true;
+    p.y_down = true;
+    p.x_min = -0.5;
+    p.x_max = W - 0.5;
+    p.y_min = -0.5;
+    p.y_max = H - 0.5;
+    p.Arrows(x0, y0, dx, dy, PaletteColor(0));
+    auto& hm = f->Add<HeatMap>();
+    hm.title = "|displacement| (grey: outside the model's field of view)";
+    hm.values = d.magnitude;
+    hm.x_lo = -0.5;
+    hm.x_hi = W - 0.5;
+    hm.y_lo = -0.5;
+    hm.y_hi = H - 0.5;
+    hm.x_label = "u [px]";
+    hm.y_label = "v [px]";
+    hm.value_label = "px";
+    sec->html += "<p class=\"note\">Distortion field: the reference is " + Escape(d.reference) +
+                 ", focal " + FormatNumber(d.focal.x(), 5) + " / " + FormatNumber(d.focal.y(), 5) +
+                 " px, principal point " + FormatNumber(d.principal_point.x(), 5) + ", " +
+                 FormatNumber(d.principal_point.y(), 5) + " px.</p>\n";
+    if (p.HasData())
+      sec->figures.push_back(f);
+  }
+
   Section CameraSection(const SensorConfig& s) {
     Section sec("sec-camera-" + s.name,
                 "Camera " + s.name + " (" + s.camera_model + ", " + s.distortion_model + ")");
@@ -563,59 +803,7 @@ class Builder {
       hm.value_label = "px";
       sec.figures.push_back(f);
     }
-    // Distortion field: where the lens moves the ideal pinhole image of each ray.
-    if (s.camera_model == "pinhole" && s.distortion_model != "none" && s.width > 0) {
-      try {
-        const CameraModel cam =
-            CameraModel::Create(s.camera_model, s.intrinsics, s.distortion_model,
-                                s.distortion_coeffs, Eigen::Vector2i(s.width, s.height));
-        std::vector<double> x0, y0, dx, dy, mag;
-        const double fx = s.intrinsics[0], fy = s.intrinsics[1], cx = s.intrinsics[2],
-                     cy = s.intrinsics[3];
-        double max_d = 0;
-        for (int j = 0; j <= 12; ++j) {
-          for (int i = 0; i <= 16; ++i) {
-            const Eigen::Vector2d uv(-0.5 + W * i / 16.0, -0.5 + H * j / 12.0);
-            Eigen::Vector3d ray;
-            if (!cam.Unproject(uv, &ray) || ray.z() <= 1e-6)
-              continue;
-            const Eigen::Vector2d ideal(fx * ray.x() / ray.z() + cx, fy * ray.y() / ray.z() + cy);
-            x0.push_back(ideal.x());
-            y0.push_back(ideal.y());
-            dx.push_back(uv.x() - ideal.x());
-            dy.push_back(uv.y() - ideal.y());
-            max_d = std::max(max_d, std::hypot(dx.back(), dy.back()));
-          }
-        }
-        const double scale = max_d > 0 ? (W / 16.0) / max_d : 1.0;
-        for (size_t i = 0; i < dx.size(); ++i) {
-          dx[i] *= scale;
-          dy[i] *= scale;
-        }
-        auto f = NewFigure("fig-" + s.name + "-distortion",
-                           s.name + ": distortion field (ideal pinhole -> distorted pixel), max " +
-                               FormatNumber(max_d, 3) + " px, arrows x" + FormatNumber(scale, 3),
-                           1, 1);
-        auto& p = f->Add<XYPlot>();
-        p.x_label = "u [px]";
-        p.y_label = "v [px]";
-        p.equal_aspect = true;
-        p.y_down = true;
-        p.x_min = -0.5;
-        p.x_max = W - 0.5;
-        p.y_min = -0.5;
-        p.y_max = H - 0.5;
-        p.Arrows(x0, y0, dx, dy, PaletteColor(0));
-        if (p.HasData())
-          sec.figures.push_back(f);
-      } catch (const std::exception& e) {
-        sec.html += "<p class=\"note\">distortion field not drawn: " + Escape(e.what()) + "</p>\n";
-      }
-    } else {
-      sec.html +=
-          "<p class=\"note\">distortion field drawn for pinhole cameras with a distortion "
-          "model only.</p>\n";
-    }
+    DistortionFigure(&sec, s);
     std::ostringstream h;
     h << "<p>" << c.size() << " corners in " << per_frame.size() << " images, " << ou.size()
       << " outliers; inlier RMS " << FormatNumber(Rms(du), 3) << " / " << FormatNumber(Rms(dv), 3)
@@ -912,6 +1100,7 @@ td.status{color:#fff;font-weight:bold;text-align:center}
 p.verdict{color:#fff;font-weight:bold;font-size:20px;padding:10px;border-radius:4px}
 p.omitted,p.note{color:#666;font-style:italic}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}
+table.params td:last-child{font-family:"DejaVu Sans Mono",monospace;font-size:12px}
 img.fig{width:100%;border:1px solid #eee;margin:6px 0}
 nav a{margin-right:10px}
 )";
@@ -1056,6 +1245,76 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
 
   if (!options.png_dir.empty())
     fs::create_directories(options.png_dir);
+
+  // The figures drawn, in document order; which of them need a PNG (the HTML's figures other
+  // than tables, every figure for --png-dir).
+  struct Job {
+    const Figure* figure = nullptr;
+    bool html_image = false;
+    bool png = false;
+    std::string bytes;
+  };
+  std::vector<Job> jobs;
+  for (const Section& s : sections) {
+    if (!s.omitted.empty())
+      continue;
+    for (const auto& f : s.figures) {
+      if (!f->HasData())
+        continue;  // never an empty figure
+      Job j;
+      j.figure = f.get();
+      // Table-only figures duplicate the HTML tables: the PDF needs them, the HTML does not.
+      j.html_image =
+          options.html && !std::all_of(f->panels().begin(), f->panels().end(), [](const auto& p) {
+            return dynamic_cast<const Table*>(p.get()) || dynamic_cast<const TextPanel*>(p.get());
+          });
+      j.png = j.html_image || !options.png_dir.empty();
+      jobs.push_back(std::move(j));
+    }
+  }
+  // PNGs are drawn and encoded by worker threads (each on its own cairo surface) while this
+  // thread writes the PDF pages: on the demo the PNGs are most of the work.
+  std::atomic<std::size_t> next{0};
+  std::vector<std::string> errors(jobs.size());
+  const auto worker = [&]() {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      if (!jobs[i].png)
+        continue;
+      try {
+        jobs[i].bytes = RenderPng(*jobs[i].figure, kPngScale);
+      } catch (const std::exception& e) {
+        errors[i] = jobs[i].figure->id + ": " + e.what();
+      }
+    }
+  };
+  const unsigned threads = std::clamp(options.threads > 0 ? static_cast<unsigned>(options.threads)
+                                                          : std::thread::hardware_concurrency(),
+                                      1u, 8u);
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < threads; ++t)
+    pool.emplace_back(worker);
+  std::string pdf_error;
+  if (options.pdf) {
+    out.pdf_path = (fs::path(out_dir) / "report.pdf").string();
+    try {
+      PdfDocument pdf(out.pdf_path);
+      for (const Job& j : jobs)
+        pdf.AddPage(*j.figure);
+      out.pdf_pages = pdf.pages();
+      pdf.Close();
+    } catch (const std::exception& e) {
+      pdf_error = e.what();
+    }
+  }
+  for (std::thread& t : pool)
+    t.join();
+  if (!pdf_error.empty())
+    throw std::runtime_error(pdf_error);
+  for (const std::string& e : errors) {
+    if (!e.empty())
+      throw std::runtime_error(e);
+  }
+
   std::ostringstream html;
   if (options.html) {
     html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
@@ -1065,11 +1324,7 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
       html << "<a href=\"#" << s.id << "\">" << Escape(s.heading) << "</a>";
     html << "</nav>\n";
   }
-  std::unique_ptr<PdfDocument> pdf;
-  if (options.pdf) {
-    out.pdf_path = (fs::path(out_dir) / "report.pdf").string();
-    pdf = std::make_unique<PdfDocument>(out.pdf_path);
-  }
+  std::size_t job = 0;
   for (const Section& s : sections) {
     out.section_ids.push_back(s.id);
     html << "<section id=\"" << s.id << "\"><h2>" << Escape(s.heading) << "</h2>\n";
@@ -1080,30 +1335,25 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     }
     html << s.html;
     for (const auto& f : s.figures) {
-      if (!f->HasData())
-        continue;  // never an empty figure
+      if (job >= jobs.size() || jobs[job].figure != f.get())
+        continue;  // an empty figure, not drawn
+      const Job& j = jobs[job++];
       out.figure_ids.push_back(f->id);
-      if (pdf)
-        pdf->AddPage(*f);
-      if (!options.png_dir.empty())
-        SavePng(*f, (fs::path(options.png_dir) / (f->id + ".png")).string(), 1.25);
-      // Table-only figures duplicate the HTML tables: the PDF needs them, the HTML does not.
-      const bool table_only =
-          std::all_of(f->panels().begin(), f->panels().end(), [](const auto& p) {
-            return dynamic_cast<const Table*>(p.get()) || dynamic_cast<const TextPanel*>(p.get());
-          });
-      if (options.html && !table_only) {
+      if (!options.png_dir.empty()) {
+        const std::string path = (fs::path(options.png_dir) / (f->id + ".png")).string();
+        std::ofstream png(path, std::ios::binary);
+        png.write(j.bytes.data(), static_cast<std::streamsize>(j.bytes.size()));
+        if (!png)
+          throw std::runtime_error(path + ": cannot write PNG");
+      }
+      if (j.html_image) {
         html << "<img class=\"fig\" id=\"" << f->id << "\" alt=\"" << Escape(f->title)
-             << "\" src=\"data:image/png;base64," << Base64(RenderPng(*f, 1.25)) << "\">\n";
+             << "\" src=\"data:image/png;base64," << Base64(j.bytes) << "\">\n";
       } else if (options.html) {
         html << "<div class=\"figtable\" id=\"" << f->id << "\"></div>\n";
       }
     }
     html << "</section>\n";
-  }
-  if (pdf) {
-    out.pdf_pages = pdf->pages();
-    pdf->Close();
   }
   if (options.html) {
     html << "</body></html>\n";

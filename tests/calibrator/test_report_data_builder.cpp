@@ -4,11 +4,13 @@
 // measurement comes back as exactly its perturbation, and the correlation of a known covariance.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "ctcal/calibrator/discrete/discrete_residuals.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/sensors/gyro_intrinsics.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -184,6 +186,82 @@ TEST(ReportVersions, NameEveryLibrary) {
   EXPECT_EQ(v[0].second.substr(0, 2), "2.");
   for (const auto& [key, value] : v)
     EXPECT_FALSE(value.empty()) << key;
+}
+
+// The discrete method's keyframe states made from the closed-form motion (base readings from
+// the base IMU's model, zero biases): poses read as the corner residuals read them (A.1 / A.2),
+// and the C2 interpolation of rates and accelerations reproduces the motion.
+TEST_F(ReportDataBuilder, KeyframeTrajectoryReadsPosesAsTheResidualsAndInterpolatesRates) {
+  SensorState& base = state_->base();
+  const Eigen::Vector3d g_W = state_->gravity();
+  std::vector<discrete::Keyframe> kf(41);
+  for (std::size_t k = 0; k < kf.size(); ++k) {
+    discrete::Keyframe& f = kf[k];
+    f.t = 0.05 * static_cast<double>(k);
+    const Se3Kinematics<double> m = Motion(static_cast<std::int64_t>(std::llround(f.t * 1e9)), 2);
+    const Eigen::Quaterniond q(m.R_W_B);
+    f.q_W_B = {q.x(), q.y(), q.z(), q.w()};
+    f.p_W_B = {m.p_W_B.x(), m.p_W_B.y(), m.p_W_B.z()};
+    f.v_W = {m.v_W.x(), m.v_W.y(), m.v_W.z()};
+    f.raw.t = f.t;
+    base.imu->RawFromTrue(m.w_B, m.SpecificForce(g_W), Eigen::Vector3d::Zero(),
+                          Eigen::Vector3d::Zero(), &f.raw.w_m, &f.raw.a_m);
+  }
+  // Slots as the discrete problem chooses them: A.1 within 10 ms of a keyframe, else A.2.
+  const auto slot = [&](double t) {
+    const int k = std::clamp(static_cast<int>(std::floor(t / 0.05)), 0, 39);
+    if (t - kf[k].t <= 0.01)
+      return KeyframeSlot{k, true};
+    if (kf[k + 1].t - t <= 0.01)
+      return KeyframeSlot{k + 1, true};
+    return KeyframeSlot{k, false};
+  };
+  const TrajectoryEvaluator traj = KeyframeTrajectory(kf, &*base.imu, g_W, 0, slot);
+  const auto at = [](double t) { return static_cast<std::int64_t>(std::llround(t * 1e9)); };
+  // A.2 at mid-interval: the geodesic's midpoint, p = (p_k + p_k1) / 2.
+  {
+    const Se3Kinematics<double> m = traj(at(0.525), 0);
+    const Eigen::Vector3d mid =
+        0.5 * (Eigen::Vector3d(kf[10].p_W_B.data()) + Eigen::Vector3d(kf[11].p_W_B.data()));
+    EXPECT_NEAR((m.p_W_B - mid).norm(), 0.0, 1e-12);
+  }
+  // A.1 5 ms after keyframe 10: p_k + v_k s + (R_k a_B + g) s^2 / 2 with the corrected reading.
+  {
+    const double s = 0.005;
+    const Se3Kinematics<double> truth = Motion(at(0.5), 2);
+    const Eigen::Vector3d expect = truth.p_W_B + truth.v_W * s + 0.5 * truth.a_W * s * s;
+    EXPECT_NEAR((traj(at(0.5 + s), 0).p_W_B - expect).norm(), 0.0, 1e-9);
+  }
+  // Rates and accelerations: exact at the keyframes, the motion's to interpolation accuracy
+  // between them (a 0.05 s spacing of a 1.3 rad/s motion).
+  for (const double t : {0.5, 0.51, 0.525, 1.234, 1.7}) {
+    const Se3Kinematics<double> m = traj(at(t), 2), truth = Motion(at(t), 2);
+    const double tol = std::abs(t - 0.05 * std::round(t / 0.05)) < 1e-12 ? 1e-9 : 5e-5;
+    EXPECT_NEAR((m.w_B - truth.w_B).norm(), 0.0, tol) << t;
+    EXPECT_NEAR((m.a_W - truth.a_W).norm(), 0.0, 10 * tol) << t;
+    EXPECT_NEAR((m.alpha_B - truth.alpha_B).norm(), 0.0, 1e-3) << t;
+    EXPECT_NEAR((m.p_W_B - truth.p_W_B).norm(), 0.0, 1e-6) << t;
+    EXPECT_NEAR((m.R_W_B.transpose() * truth.R_W_B - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-6)
+        << t;
+  }
+}
+
+// Keyframe biases are held over each interval (as the preintegration factors use them), on the
+// base clock reached from the sensor's own by + time_offset.
+TEST(KeyframeBiases, HeldPerIntervalOnTheBaseClock) {
+  const BiasEvaluator b = KeyframeBiases(
+      {0.0, 0.1, 0.2},
+      {Eigen::Vector3d::Constant(1), Eigen::Vector3d::Constant(2), Eigen::Vector3d::Constant(3)},
+      {}, 1'000'000'000, 0.03);
+  Eigen::Vector3d bg, ba = Eigen::Vector3d::Constant(-7);
+  b(1'000'000'000 + 60'000'000, &bg, &ba);  // own 0.06 s = base 0.09 s: interval 0
+  EXPECT_EQ(bg.x(), 1.0);
+  EXPECT_EQ(ba.x(), -7.0);                  // a gyroscope: b_a left alone
+  b(1'000'000'000 + 80'000'000, &bg, &ba);  // base 0.11 s: interval 1
+  EXPECT_EQ(bg.x(), 2.0);
+  b(1'000'000'000 + 900'000'000, &bg, &ba);  // past the last keyframe: its value
+  EXPECT_EQ(bg.x(), 3.0);
+  EXPECT_THROW(KeyframeBiases({0.0}, {}, {}, 0, 0.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -62,6 +62,10 @@ struct ReportCorner {
   bool outlier = false;  // removed before the final solve
 };
 
+// An inertial sensor's biases at time t_ns on its own clock (b_a: left alone for a gyroscope).
+using BiasEvaluator =
+    std::function<void(std::int64_t t_ns, Eigen::Vector3d* b_g, Eigen::Vector3d* b_a)>;
+
 struct ReportInputs {
   std::map<std::string, std::vector<ReportCorner>> corners;  // per camera
   std::map<std::string, std::vector<ImuSample>> imu;         // per IMU: the samples of the solve
@@ -69,7 +73,47 @@ struct ReportInputs {
   std::int64_t t0_ns = 0, t1_ns = 0;                         // trajectory range, base clock
   double trajectory_rate_hz = 20.0;
   int bias_every = 10;  // one bias row per this many samples
+  // Per inertial sensor, replaces the state's bias splines (the discrete method's biases live in
+  // its keyframe states).
+  std::map<std::string, BiasEvaluator> bias;
 };
+
+namespace discrete {
+struct Keyframe;
+}
+
+// Which keyframe the discrete formulation's residuals read at a base-clock time: A.1 from
+// keyframe k (kinematic), A.2 between k and k + 1, k = -1 outside (discrete_calibrator.cpp).
+struct KeyframeSlot {
+  int k = -1;
+  bool kinematic = true;
+};
+
+// The base motion of the discrete formulation (discrete_calibrator.h) for BuildReportData, from
+// its final keyframe states (t in s from t0_ns):
+//  - poses (derivatives 0: the corners, the trajectory) exactly as the corner residuals read
+//    them, BaseMotionAt (discrete_residuals.h) on the keyframe(s) `slot(t)` names; outside the
+//    keyframes A.1 from the nearest end keyframe;
+//  - rates and accelerations (derivatives >= 1: the inertial predictions), which the discrete
+//    problem never evaluates per sample (its inertial residuals are preintegrated between
+//    keyframes): the C2 interpolation of the keyframe states, position quintic Hermite through
+//    (p, v, a_W) and rotation R_k Exp(phi(t)) with phi cubic Hermite matching w_B at both ends,
+//    w_B = Jr(phi) phi', alpha_B by central differences; a_W and w_B at a keyframe are its A.1
+//    values (the base IMU's corrected reading there). The per-sample errors therefore include
+//    this interpolation's error besides the noise: the discrete report's inertial whitened RMS
+//    is larger than result.yaml's (docs/report.md).
+// `base` (the base IMU's intrinsics) must outlive the evaluator; keyframes and g_W are copied.
+TrajectoryEvaluator KeyframeTrajectory(const std::vector<discrete::Keyframe>& keyframes,
+                                       ImuIntrinsics* base, const Eigen::Vector3d& g_W,
+                                       std::int64_t t0_ns,
+                                       std::function<KeyframeSlot(double t)> slot);
+
+// The discrete formulation's biases, held over each keyframe interval as its preintegration
+// factors use them: keyframe k's values from t_k on (t_k in s from t0_ns on the base clock; the
+// sensor's own clock maps onto it by + time_offset). b_a empty for a gyroscope.
+BiasEvaluator KeyframeBiases(std::vector<double> t_k, std::vector<Eigen::Vector3d> b_g,
+                             std::vector<Eigen::Vector3d> b_a, std::int64_t t0_ns,
+                             double time_offset);
 
 // The correlation of a tangent-space covariance; a parameter with a non-finite or non-positive
 // variance (or flagged undetermined) gets NaN in its row and column, 1 on the diagonal otherwise.

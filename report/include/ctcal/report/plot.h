@@ -125,6 +125,9 @@ class Table : public Panel {
   };
   std::vector<std::vector<Cell>> rows;
   double font_size = 10.0;
+  // > 0: a table too wide or too long for its panel is drawn with a smaller font, down to this
+  // size, before cells are cut and the rows beyond the panel are left out.
+  double min_font_size = 0.0;
 
   void AddRow(const std::vector<std::string>& texts);
   void Draw(void* cairo, const Rect& area) const override;
@@ -163,6 +166,7 @@ class TextPanel : public Panel {
  public:
   std::vector<std::string> lines;
   double font_size = 11.0;
+  double min_font_size = 0.0;  // > 0: shrink (down to it) until the lines fit the panel
   bool monospace = false;
 
   void Draw(void* cairo, const Rect& area) const override;

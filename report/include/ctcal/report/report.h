@@ -54,6 +54,7 @@ struct ReportOptions {
   bool html = true;
   bool pdf = true;
   std::string png_dir;  // when set, every figure is also written there as <id>.png (docs)
+  int threads = 0;      // PNG workers beside the PDF writer; 0: the hardware's threads (max 8)
   CheckThresholds thresholds;
 };
 
