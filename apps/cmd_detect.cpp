@@ -87,16 +87,25 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
   if (unreadable > 0)
     std::printf(", %zu unreadable (first: %s)", unreadable, first_error.c_str());
   std::printf("\n");
-  const bool tags = detector.board().type() == TargetType::kAprilGrid;
-  for (const auto& [reason, count] : rejected) {
-    std::printf("  rejected: %zu %s (%s)\n", count,
-                reason == RejectReason::kTooFewTags ? "views" : (tags ? "tags" : "corners"),
-                ToString(reason));
-  }
+  // What a rejection counts: AprilGrid rules drop tags; checkerboard and ChArUco rules drop
+  // corners, except ChArUco's marker rules (ids not on the board, duplicates).
+  const TargetType type = detector.board().type();
+  const auto noun = [type](RejectReason reason) {
+    if (reason == RejectReason::kTooFewTags || reason == RejectReason::kNotThisBoard)
+      return "views";
+    if (type == TargetType::kAprilGrid)
+      return "tags";
+    if (type == TargetType::kCharuco &&
+        (reason == RejectReason::kUnknownId || reason == RejectReason::kDuplicateId))
+      return "markers";
+    return "corners";
+  };
+  for (const auto& [reason, count] : rejected)
+    std::printf("  rejected: %zu %s (%s)\n", count, noun(reason), ToString(reason));
   if (with_board == 0) {
     std::string hint = "check the target file";
-    if (rejected.count(RejectReason::kUnknownId))
-      hint = "tag ids beyond this board were seen: a larger board, or the wrong target file?";
+    if (rejected.count(RejectReason::kUnknownId) || rejected.count(RejectReason::kNotThisBoard))
+      hint = "ids beyond this board were seen: a larger board, or the wrong target file?";
     else if (rejected.count(RejectReason::kBadBorder))
       hint = "tags with another border width were seen: check blackTagBorder";
     return cli.RunFailed("no board found in any image of " + camera + " (" + hint + ")");
@@ -121,7 +130,7 @@ int RunDetect(int argc, char** argv) {
   std::string target_path, data_dir, camera;
   int threads = 0;
   cli.options().add_options()("target", po::value(&target_path)->required(),
-                              "Kalibr target file (aprilgrid or checkerboard)")(
+                              "target file (Kalibr's aprilgrid or checkerboard, or charuco)")(
       "data", po::value(&data_dir)->required(), "dataset folder (SPEC section 6)")(
       "camera", po::value(&camera),
       "camera folder name (default: every DATA/cam* folder with a data.csv)")(

@@ -9,7 +9,7 @@ if(_ceres_has_suitesparse EQUAL -1)
     "ctcal needs Ceres built with SuiteSparse (CHOLMOD); the Ceres found at ${Ceres_DIR} has no "
     "SuiteSparse support. Install Debian's libceres-dev and libsuitesparse-dev (make deps).")
 endif()
-find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d aruco)
 find_package(apriltag CONFIG REQUIRED)
 if(NOT TARGET apriltag::apriltag OR NOT TARGET apriltag::apriltag-utils)
   message(FATAL_ERROR "apriltag found without its apriltag::apriltag/apriltag-utils targets")

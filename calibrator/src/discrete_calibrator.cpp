@@ -91,8 +91,7 @@ class DiscreteProblem {
     out->num_knots = 0;
 
     spline_internal::SplineProblem<4, Se3Representation::kSplit> sp(&prep_, spline_options_, log_);
-    sp.InitializeTrajectory();
-    sp.InitializeGravity();
+    sp.InitializeTrajectory();  // also gravity
     out->knot_spacing_s = prep_.knot_spacing_s;
     out->num_knots = sp.NumKnots();
     const auto& spline = sp.spline();

@@ -17,7 +17,7 @@ constexpr const char* kStage = "corner detection";
 
 // Why no image showed the board, from what the detector rejected.
 std::string NoBoardHint(const std::map<RejectReason, std::size_t>& rejected) {
-  if (rejected.count(RejectReason::kUnknownId))
+  if (rejected.count(RejectReason::kUnknownId) || rejected.count(RejectReason::kNotThisBoard))
     return "tag ids beyond the rig's target were seen: a larger board, or the wrong target?";
   if (rejected.count(RejectReason::kBadBorder))
     return "tags with another border width were seen: check the target's blackTagBorder";

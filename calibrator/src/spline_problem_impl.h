@@ -36,6 +36,7 @@ using residual_internal::Jacobian;
 #include "ctcal/spline/so3.h"
 #include "ctcal/spline/so3_manifold.h"
 #include "ctcal/targets/board.h"
+#include "spline_trajectory_fit.h"
 
 namespace ctcal {
 namespace spline_internal {
@@ -167,45 +168,33 @@ class SplineProblem {
 
   // --- initialisation ---------------------------------------------------------------------------
 
-  // The trajectory from the base poses: a coarse fit (knots no closer than two camera frames, so
-  // that every segment sees poses), then the final spacing fitted to the camera poses, the coarse
-  // spline (weakly, between frames) and the base gyroscope (the fast rotations).
+  // The trajectory and gravity from the base poses and the base IMU (spline_trajectory_fit.h):
+  // knots start at the pose nearest to their centre, then Gauss-Newton on the poses, the gyro and
+  // the accelerometer, with the base IMU's intrinsics and seeded biases at their guesses.
   void InitializeTrajectory() {
     const auto& poses = prep_.base_poses;
-    double frame_dt = 0.05;
-    if (poses.size() > 1)
-      frame_dt = 1e-9 * static_cast<double>(poses.back().t_ns - poses.front().t_ns) /
-                 static_cast<double>(poses.size() - 1);
-    const double coarse_dt = std::max(prep_.knot_spacing_s, 3.0 * frame_dt);
-    Spline coarse(MakeTiming(prep_.t0_ns, coarse_dt),
-                  NumKnotsFor(prep_.t0_ns, prep_.t1_ns, coarse_dt));
-    Fit(poses, nullptr, nullptr, &coarse);
+    TrajectoryFit<N, Rep>::SeedKnots(poses, &spline_);
     const PreparedInertial& base = prep_.inertial.front();
-    std::vector<std::pair<std::int64_t, Eigen::Vector3d>> rates;
+    std::vector<BaseRateSample> imu;
+    imu.reserve(base.imu.size());
     for (const ImuSample& s : base.imu) {
-      Eigen::Vector3d w_I, a_I;
-      base.state->imu->TrueFromRaw(s.w_m, s.a_m, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-                                   &w_I, &a_I);
-      rates.emplace_back(s.t_ns, w_I);
+      BaseRateSample z;
+      z.t_ns = s.t_ns;
+      base.state->imu->TrueFromRaw(s.w_m, s.a_m, base.state->bias_gyro.Evaluate(s.t_ns),
+                                   base.state->bias_accel.Evaluate(s.t_ns), &z.w_I, &z.a_I);
+      imu.push_back(z);
     }
-    Fit(poses, &coarse, &rates, &spline_);
-  }
-
-  // g_W ~ mean over the base accelerometer of a_W(t) - R_W_B(t) a_I(t) (specific force
-  // a_I = R_W_B^T (a_W - g_W)), magnitude from the rig.
-  void InitializeGravity() {
-    const PreparedInertial& base = prep_.inertial.front();
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    int n = 0;
-    for (const ImuSample& s : base.imu) {
-      Eigen::Vector3d w_I, a_I;
-      base.state->imu->TrueFromRaw(s.w_m, s.a_m, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-                                   &w_I, &a_I);
-      const Se3Kinematics<double> kin = spline_.Evaluate(Clamp(s.t_ns), 2);
-      sum += kin.a_W - kin.R_W_B * a_I;
-      ++n;
-    }
-    state_.SetGravity(sum / std::max(n, 1));
+    Eigen::Vector3d g_W = state_.gravity();
+    const TrajectoryFitReport r =
+        TrajectoryFit<N, Rep>(poses, imu, TrajectoryFitOptions{}).Run(&spline_, &g_W);
+    state_.SetGravity(g_W);
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "  spline fit: %d knots (dt %.4f s) to %zu poses and %zu base IMU samples, cost "
+                  "%.3e -> %.3e, %d iterations",
+                  spline_.NumKnots(), spline_.timing().dt_s(), poses.size(), imu.size(),
+                  r.initial_cost, r.final_cost, r.iterations);
+    log_(line);
   }
 
   // --- the problem ------------------------------------------------------------------------------
@@ -270,17 +259,24 @@ class SplineProblem {
   ceres::Solver::Summary Solve() {
     IterationLogger logger(log_);
     ceres::Solver::Options so = SolverOptions(options_, &logger);
+    // Gauss-Newton steps right away instead of Levenberg-Marquardt's default damping 1e-4, which
+    // crawls along the weak directions: the trajectory fit starts every solve inside the basin
+    // (the radius still shrinks after a rejected step). Demo: 8 robust iterations -> 2.
+    so.initial_trust_region_radius = 1e8;
     if (robust_) {
       // The robust solve only seeds the outlier gate and the plain solve: a relative cost change
-      // of 1e-6 (~0.2 at the demo's cost, i.e. well inside a sigma of every parameter) is enough.
+      // of 1e-6 (~0.5 at the demo's cost) is enough.
       so.function_tolerance = 1e-6;
-    } else {
-      // The plain solves start at the robust optimum: Gauss-Newton steps right away instead of
-      // the default damping 1e-4, which crawls along the weak directions (docs/performance.md).
-      so.initial_trust_region_radius = 1e8;
+    } else if (options_.stop_cost_change > 0.0 && last_cost_ > 0.0) {
+      // Stop when a step would lower the cost by less than stop_cost_change
+      // (SplineCalibratorOptions derives the sigma bound); Ceres' tolerance is relative to the
+      // current cost.
+      so.function_tolerance =
+          std::max(so.function_tolerance, options_.stop_cost_change / last_cost_);
     }
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem_.get(), &summary);
+    last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +
                                "): " + DivergenceCulprit() +
@@ -667,139 +663,6 @@ class SplineProblem {
     prior_ids_.insert(prior_ids_.end(), ids.begin(), ids.end());
   }
 
-  // --- spline fitting ---------------------------------------------------------------------------
-
-  struct PoseFit {
-    SegmentClock clock;
-    Eigen::Quaterniond q_W_B;
-    Eigen::Vector3d p_W_B;
-    double w_R, w_p;
-    template <typename T>
-    bool operator()(T const* const* k, T* r) const {
-      Se3Kinematics<T> kin;
-      Spline::template EvaluateSegment<T>(k, T(clock.U()), T(clock.inv_dt), 0, nullptr, &kin);
-      const QuatT<T> q(kin.R_W_B);
-      const Vec3T<T> e = LogSO3<T>(QuatT<T>(q_W_B.conjugate().cast<T>() * q));
-      for (int i = 0; i < 3; ++i) {
-        r[i] = e(i) * T(w_R);
-        r[3 + i] = (kin.p_W_B(i) - T(p_W_B(i))) * T(w_p);
-      }
-      return true;
-    }
-  };
-
-  struct RateFit {
-    SegmentClock clock;
-    Eigen::Vector3d w_B;
-    double w;
-    template <typename T>
-    bool operator()(T const* const* k, T* r) const {
-      Se3Kinematics<T> kin;
-      Spline::template EvaluateSegment<T>(k, T(clock.U()), T(clock.inv_dt), 1, nullptr, &kin);
-      for (int i = 0; i < 3; ++i)
-        r[i] = (kin.w_B(i) - T(w_B(i))) * T(w);
-      return true;
-    }
-  };
-
-  template <class F>
-  static void AddFit(ceres::Problem* P, Spline* s, int seg, F* f, int num_residuals) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<F, kAutoDiffStride>(f);
-    for (int b = 0; b < Spline::kNumBlocks; ++b)
-      cost->AddParameterBlock(Spline::AmbientSize(b));
-    cost->SetNumResiduals(num_residuals);
-    const auto blocks = s->SegmentBlocks(seg);
-    P->AddResidualBlock(cost, nullptr, std::vector<double*>(blocks.begin(), blocks.end()));
-  }
-
-  static int SegmentOn(const Spline& s, std::int64_t t_ns) {
-    const std::int64_t k = (t_ns - s.timing().t0_ns) / s.timing().dt_ns;
-    return static_cast<int>(
-        std::min<std::int64_t>(std::max<std::int64_t>(k, 0), s.NumSegments() - 1));
-  }
-
-  // Least-squares fit of `s` to the poses (sigma 1 cm, ~0.6 deg), to a prior spline sampled four
-  // times per knot (sigma 10 cm, ~6 deg: it only fills gaps between frames) and to body rates.
-  void Fit(const std::vector<TimedPose>& poses, const Spline* prior,
-           const std::vector<std::pair<std::int64_t, Eigen::Vector3d>>* rates, Spline* s) {
-    // Knots start at the pose nearest to their centre (or the prior there).
-    std::size_t j = 0;
-    for (int k = 0; k < s->NumKnots(); ++k) {
-      const std::int64_t tc = s->KnotCentreTimeNs(k);
-      Eigen::Quaterniond q;
-      Eigen::Vector3d p;
-      if (prior != nullptr) {
-        const Se3Kinematics<double> kin =
-            prior->Evaluate(std::min(std::max(tc, prior->MinTimeNs()), prior->MaxTimeNs()), 0);
-        q = Eigen::Quaterniond(kin.R_W_B);
-        p = kin.p_W_B;
-      } else {
-        while (j + 1 < poses.size() &&
-               std::llabs(poses[j + 1].t_ns - tc) <= std::llabs(poses[j].t_ns - tc))
-          ++j;
-        q = poses[j].q_W_B;
-        p = poses[j].p_W_B;
-      }
-      s->KnotRotation(k) = q.normalized();
-      s->KnotPosition(k) = p;
-    }
-    ceres::Problem::Options po;
-    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem P(po);
-    for (int k = 0; k < s->NumKnots(); ++k) {
-      if constexpr (Rep == Se3Representation::kJoint) {
-        P.AddParameterBlock(s->KnotData(k), 7, &se3_right_);
-      } else {
-        P.AddParameterBlock(s->KnotData(k), 4, &so3_right_);
-        P.AddParameterBlock(s->KnotData(k) + 4, 3);
-      }
-    }
-    const auto in_range = [&](std::int64_t t) {
-      return t >= s->MinTimeNs() && t <= s->MaxTimeNs();
-    };
-    for (const TimedPose& pose : poses) {
-      if (!in_range(pose.t_ns))
-        continue;
-      const int seg = SegmentOn(*s, pose.t_ns);
-      AddFit(&P, s, seg,
-             new PoseFit{SegmentClock::At(pose.t_ns, s->timing(), seg), pose.q_W_B, pose.p_W_B,
-                         100.0, 100.0},
-             6);
-    }
-    if (prior != nullptr) {
-      const std::int64_t step = std::max<std::int64_t>(1, s->timing().dt_ns / 4);
-      for (std::int64_t t = s->MinTimeNs(); t <= s->MaxTimeNs(); t += step) {
-        const Se3Kinematics<double> kin =
-            prior->Evaluate(std::min(std::max(t, prior->MinTimeNs()), prior->MaxTimeNs()), 0);
-        const int seg = SegmentOn(*s, t);
-        AddFit(&P, s, seg,
-               new PoseFit{SegmentClock::At(t, s->timing(), seg), Eigen::Quaterniond(kin.R_W_B),
-                           kin.p_W_B, 10.0, 10.0},
-               6);
-      }
-    }
-    if (rates != nullptr) {
-      for (const auto& [t, w] : *rates) {
-        if (!in_range(t))
-          continue;
-        const int seg = SegmentOn(*s, t);
-        AddFit(&P, s, seg, new RateFit{SegmentClock::At(t, s->timing(), seg), w, 20.0}, 3);
-      }
-    }
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-    so.max_num_iterations = 30;
-    so.num_threads = options_.threads;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &P, &summary);
-    char line[160];
-    std::snprintf(line, sizeof line,
-                  "  spline fit: %d knots (dt %.3f s), cost %.3e -> %.3e, %d iterations",
-                  s->NumKnots(), s->timing().dt_s(), summary.initial_cost, summary.final_cost,
-                  static_cast<int>(summary.iterations.size()));
-    log_(line);
-  }
-
   Prepared& prep_;
   CalibrationState& state_;
   SplineCalibratorOptions options_;
@@ -812,6 +675,7 @@ class SplineProblem {
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<int> segments_;
   bool robust_ = false;
+  double last_cost_ = 0.0;  // of the last solve
 
   So3RightManifold so3_right_;
   Se3RightManifold se3_right_;
@@ -829,7 +693,6 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   out->num_knots = sp.NumKnots();
   log("[3/6] initialising the trajectory spline");
   sp.InitializeTrajectory();
-  sp.InitializeGravity();
   {
     const Eigen::Vector3d g = prep->state->gravity();
     char line[120];

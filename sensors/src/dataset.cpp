@@ -225,6 +225,8 @@ void Finish(std::ofstream& f, const std::string& path) {
 int TargetCornerCount(const TargetConfig& target) {
   if (target.type == TargetType::kAprilGrid)
     return 4 * target.tag_rows * target.tag_cols;
+  if (target.type == TargetType::kCharuco)
+    return (target.squares_x - 1) * (target.squares_y - 1);
   return target.target_rows * target.target_cols;
 }
 

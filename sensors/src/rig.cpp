@@ -115,6 +115,11 @@ bool SameTarget(const TargetConfig& a, const TargetConfig& b) {
     return a.tag_cols == b.tag_cols && a.tag_rows == b.tag_rows && a.tag_size == b.tag_size &&
            a.tag_spacing == b.tag_spacing && a.black_tag_border == b.black_tag_border;
   }
+  if (a.type == TargetType::kCharuco) {
+    return a.squares_x == b.squares_x && a.squares_y == b.squares_y &&
+           a.square_length_m == b.square_length_m && a.marker_length_m == b.marker_length_m &&
+           a.dictionary == b.dictionary;
+  }
   return a.target_cols == b.target_cols && a.target_rows == b.target_rows &&
          a.row_spacing_m == b.row_spacing_m && a.col_spacing_m == b.col_spacing_m;
 }

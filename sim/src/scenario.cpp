@@ -77,6 +77,10 @@ Scene SceneFor(const TargetConfig& target) {
   if (target.type == TargetType::kAprilGrid) {
     size_x = target.tag_size * (target.tag_cols + (target.tag_cols - 1) * target.tag_spacing);
     size_y = target.tag_size * (target.tag_rows + (target.tag_rows - 1) * target.tag_spacing);
+  } else if (target.type == TargetType::kCharuco) {
+    // The inner corners span squareLength .. (squares - 1) squareLength: centred on the print.
+    size_x = target.squares_x * target.square_length_m;
+    size_y = target.squares_y * target.square_length_m;
   } else {
     // SPEC section 5: x grows with the row index.
     size_x = (target.target_rows - 1) * target.row_spacing_m;

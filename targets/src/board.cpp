@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <opencv2/aruco/charuco.hpp>
+
 #include "tag_family.h"
 
 namespace ctcal {
@@ -33,6 +35,56 @@ Board::Board(const TargetConfig& config) : config_(config) {
         corners_W_.emplace_back((c / 2) * period + (c % 2) * config.tag_size,
                                 (r / 2) * period + (r % 2) * config.tag_size, 0.0);
       }
+    }
+  } else if (config.type == TargetType::kCharuco) {
+    const int dictionary_id = ArucoDictionaryId(config.dictionary);
+    if (config.squares_x < 2 || config.squares_y < 2 || !(config.square_length_m > 0.0) ||
+        !(config.marker_length_m > 0.0) || !(config.marker_length_m < config.square_length_m) ||
+        dictionary_id < 0) {
+      throw std::invalid_argument(
+          "charuco: invalid squaresX/squaresY/squareLength/markerLength/dictionary");
+    }
+    // OpenCV builds the board: its corner ids and positions and its marker layout are what
+    // cv::aruco detects and interpolates against, so they are taken from it, not re-derived.
+    const cv::Ptr<cv::aruco::Dictionary> dictionary =
+        cv::aruco::getPredefinedDictionary(dictionary_id);
+    const int num_markers = config.squares_x * config.squares_y / 2;  // the white squares
+    if (num_markers > dictionary->bytesList.rows) {
+      throw std::invalid_argument("charuco: " + std::to_string(num_markers) + " markers, but " +
+                                  config.dictionary + " has only " +
+                                  std::to_string(dictionary->bytesList.rows));
+    }
+    const cv::Ptr<cv::aruco::CharucoBoard> charuco = cv::aruco::CharucoBoard::create(
+        config.squares_x, config.squares_y, static_cast<float>(config.square_length_m),
+        static_cast<float>(config.marker_length_m), dictionary);
+    rows_ = config.squares_y - 1;
+    cols_ = config.squares_x - 1;
+    // OpenCV's board frame has y down the print (z into it); ours has y up and z towards the
+    // viewer, as for every board: y_W = squaresY * squareLength - y_OpenCV, same ids.
+    const double height = config.squares_y * config.square_length_m;
+    for (const cv::Point3f& p : charuco->chessboardCorners)
+      corners_W_.emplace_back(p.x, height - p.y, 0.0);
+    marker_bits_ = dictionary->markerSize;
+    marker_of_square_.assign(static_cast<size_t>(config.squares_x * config.squares_y), -1);
+    for (size_t i = 0; i < charuco->ids.size(); ++i) {
+      // objPoints[i][0] is the marker's top-left corner as printed.
+      const cv::Point3f& top_left = charuco->objPoints[i][0];
+      Marker marker;
+      marker.id = charuco->ids[i];
+      marker.top_left = Eigen::Vector2d(top_left.x, height - top_left.y);
+      const double side = config.marker_length_m;
+      const int col =
+          static_cast<int>(std::floor((marker.top_left.x() + 0.5 * side) / config.square_length_m));
+      const int row =
+          static_cast<int>(std::floor((marker.top_left.y() - 0.5 * side) / config.square_length_m));
+      if (col < 0 || row < 0 || col >= config.squares_x || row >= config.squares_y)
+        throw std::logic_error("charuco: a marker outside the board (OpenCV's layout changed?)");
+      marker_of_square_[static_cast<size_t>(row * config.squares_x + col)] =
+          static_cast<int>(markers_.size());
+      markers_.push_back(marker);
+      const cv::Mat bits = cv::aruco::Dictionary::getBitsFromByteList(
+          dictionary->bytesList.rowRange(marker.id, marker.id + 1), marker_bits_);
+      marker_data_.emplace_back(bits.begin<uint8_t>(), bits.end<uint8_t>());
     }
   } else {
     if (config.target_rows < 2 || config.target_cols < 2 || !(config.row_spacing_m > 0.0) ||
@@ -75,6 +127,11 @@ Eigen::AlignedBox2d Board::PatternBox() const {
         Eigen::Vector2d((config_.tag_cols - 1) * period + config_.tag_size + gap,
                         (config_.tag_rows - 1) * period + config_.tag_size + gap));
   }
+  if (type() == TargetType::kCharuco) {
+    return Eigen::AlignedBox2d(Eigen::Vector2d::Zero(),
+                               Eigen::Vector2d(config_.squares_x * config_.square_length_m,
+                                               config_.squares_y * config_.square_length_m));
+  }
   // Inner corners plus one square all round.
   return Eigen::AlignedBox2d(Eigen::Vector2d(-config_.row_spacing_m, -config_.col_spacing_m),
                              Eigen::Vector2d(config_.target_rows * config_.row_spacing_m,
@@ -84,11 +141,45 @@ Eigen::AlignedBox2d Board::PatternBox() const {
 double Board::FeatureSize() const {
   if (type() == TargetType::kAprilGrid)
     return std::min(TagBitSize(), config_.tag_spacing * config_.tag_size);
+  if (type() == TargetType::kCharuco)
+    return config_.marker_length_m / MarkerCells();
   return std::min(config_.row_spacing_m, config_.col_spacing_m);
 }
 
 bool Board::IsBlack(double x, double y) const {
-  return type() == TargetType::kAprilGrid ? AprilGridIsBlack(x, y) : CheckerboardIsBlack(x, y);
+  switch (type()) {
+    case TargetType::kAprilGrid:
+      return AprilGridIsBlack(x, y);
+    case TargetType::kCheckerboard:
+      return CheckerboardIsBlack(x, y);
+    case TargetType::kCharuco:
+      return CharucoIsBlack(x, y);
+  }
+  return false;
+}
+
+bool Board::CharucoIsBlack(double x, double y) const {
+  const double square = config_.square_length_m;
+  const double fi = std::floor(x / square);
+  const double fj = std::floor(y / square);
+  if (fi < 0.0 || fj < 0.0 || fi >= config_.squares_x || fj >= config_.squares_y)
+    return false;
+  const int index = marker_of_square_[static_cast<size_t>(static_cast<int>(fj) * config_.squares_x +
+                                                          static_cast<int>(fi))];
+  if (index < 0)
+    return true;  // the squares without a marker are the black ones
+  const Marker& marker = markers_[static_cast<size_t>(index)];
+  const int cells = MarkerCells();
+  const double cell = config_.marker_length_m / cells;
+  const double lx = (x - marker.top_left.x()) / cell;
+  const double ly = (marker.top_left.y() - y) / cell;  // down the marker from its top
+  if (lx < 0.0 || ly < 0.0 || lx >= cells || ly >= cells)
+    return false;  // the white of the square around the marker
+  const int cx = static_cast<int>(lx), cy = static_cast<int>(ly);
+  if (cx == 0 || cy == 0 || cx == cells - 1 || cy == cells - 1)
+    return true;  // the marker's black border
+  return marker_data_[static_cast<size_t>(index)]
+                     [static_cast<size_t>((cy - 1) * marker_bits_ + cx - 1)] == 0;
 }
 
 bool Board::AprilGridIsBlack(double x, double y) const {

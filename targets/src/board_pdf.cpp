@@ -70,6 +70,29 @@ void WriteBoardPdf(const Board& board, const std::string& path, const BoardPdfOp
       for (int i = 0; i <= board.tag_cols(); ++i)
         cairo_rectangle(cr, i * period - gap, j * period - gap, gap, gap);
     }
+  } else if (board.type() == TargetType::kCharuco) {
+    const TargetConfig& t = board.config();
+    for (int j = 0; j < t.squares_y; ++j) {
+      for (int i = 0; i < t.squares_x; ++i) {
+        // A black square, or a white one around a marker (drawn below): its margin tells.
+        const double margin = 0.25 * (t.square_length_m - t.marker_length_m);
+        if (board.IsBlack(i * t.square_length_m + margin, j * t.square_length_m + margin))
+          cairo_rectangle(cr, i * t.square_length_m, j * t.square_length_m, t.square_length_m,
+                          t.square_length_m);
+      }
+    }
+    const int cells = board.MarkerCells();
+    const double cell = t.marker_length_m / cells;
+    for (const Board::Marker& marker : board.Markers()) {
+      for (int cy = 0; cy < cells; ++cy) {
+        for (int cx = 0; cx < cells; ++cx) {
+          const double x0 = marker.top_left.x() + cx * cell;
+          const double y0 = marker.top_left.y() - (cy + 1) * cell;
+          if (board.IsBlack(x0 + 0.5 * cell, y0 + 0.5 * cell))
+            cairo_rectangle(cr, x0, y0, cell, cell);
+        }
+      }
+    }
   } else {
     const double rs = board.config().row_spacing_m;
     const double cs = board.config().col_spacing_m;
@@ -129,6 +152,13 @@ void WriteBoardPdf(const Board& board, const std::string& path, const BoardPdfOp
            Format(", tagSize: %.4g m, tagSpacing: %.4g (gap %.1f mm)", t.tag_size, t.tag_spacing,
                   t.tag_spacing * t.tag_size * 1000) +
            ", blackTagBorder: " + std::to_string(t.black_tag_border) + ", tag36h11";
+  } else if (board.type() == TargetType::kCharuco) {
+    const TargetConfig& t = board.config();
+    line = "target_type: charuco, squaresX: " + std::to_string(t.squares_x) +
+           ", squaresY: " + std::to_string(t.squares_y) +
+           Format(", squareLength: %.4g m, markerLength: %.4g m, dictionary: ", t.square_length_m,
+                  t.marker_length_m) +
+           t.dictionary;
   } else {
     const TargetConfig& t = board.config();
     line = "target_type: checkerboard, targetCols: " + std::to_string(t.target_cols) +

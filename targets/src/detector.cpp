@@ -1,5 +1,6 @@
 #include "ctcal/targets/detector.h"
 
+#include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -34,6 +35,10 @@ const char* ToString(RejectReason reason) {
       return "black border not as printed (wrong blackTagBorder?)";
     case RejectReason::kTooSmall:
       return "too small to refine";
+    case RejectReason::kOffEdges:
+      return "a refined corner off the tag's edges";
+    case RejectReason::kNotThisBoard:
+      return "corners off this board's grid (another board size in view, or the wrong file?)";
     case RejectReason::kTooFewTags:
       return "too few tags in the view";
   }
@@ -466,6 +471,138 @@ int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& c
   return distance;
 }
 
+// How far each refined corner of a tag lies off the tag's own edges (px), a check the grid and the
+// code cannot make: on a foreshortened fisheye view a corner can slide 1-2 px along a narrow bit
+// onto the corner square's side and the tag still reads as its code. Each edge's position is
+// measured across it (the centroid of the intensity rise from the black border into the white
+// gap) at 8 places along its middle (15-85 %, clear of the corner squares), relative to the edge
+// the four refined corners predict (homography, tag cells -> px). Lens distortion bends the edge
+// into a bow, zero at both ends: the offsets d(t) are fitted by
+//   d(t) = alpha (1 - t) + beta t + gamma t (1 - t),
+// and alpha, beta are the edge's offsets at its two corners, i.e. the corners' offsets across it.
+// A corner's two edges give its offset; -1 where an edge cannot be measured (image border).
+// The four edges of a tag measured against the edges its corners predict (see below).
+struct TagEdgeFit {
+  Eigen::Matrix3d H;  // tag cells (x right, y down the printed tag) -> px, through the corners
+  // Each edge's offset at its start and end corner (cells, outward positive), where measured.
+  std::array<Eigen::Vector2d, 4> ends;
+  std::array<bool, 4> measured{};
+};
+
+// The tag's corners in tag cells, in the tag's corner order.
+std::array<Eigen::Vector2d, 4> TagCellCorners(int cells) {
+  const double n = cells;
+  return {Eigen::Vector2d(0.0, n), Eigen::Vector2d(n, n), Eigen::Vector2d(n, 0.0),
+          Eigen::Vector2d(0.0, 0.0)};
+}
+
+// Outward unit normal (tag cells) of edge k -> k+1: corners run clockwise on the printed tag
+// (x right, y down), so outward is to the left.
+Eigen::Vector2d TagEdgeOutward(int cells, size_t k) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
+  const Eigen::Vector2d along = (cell[(k + 1) % 4] - cell[k]) / cells;
+  return Eigen::Vector2d(-along.y(), along.x());
+}
+
+Eigen::Vector2d ToPixel(const Eigen::Matrix3d& H, const Eigen::Vector2d& x) {
+  return (H * x.homogeneous()).hnormalized();
+}
+
+// `reach`: how far across each edge (cells) the profile runs each way.
+TagEdgeFit FitTagEdges(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                       int cells, double reach) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
+  std::vector<cv::Point2f> from, to;
+  for (size_t k = 0; k < 4; ++k) {
+    from.emplace_back(static_cast<float>(cell[k].x()), static_cast<float>(cell[k].y()));
+    to.emplace_back(static_cast<float>(corners[k].x()), static_cast<float>(corners[k].y()));
+  }
+  const cv::Mat Hcv = cv::getPerspectiveTransform(from, to);
+  TagEdgeFit fit;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      fit.H(r, c) = Hcv.at<double>(r, c);
+  constexpr double kStep = 0.1;
+  constexpr int kSamples = 8;
+  for (size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d a = cell[k], b = cell[(k + 1) % 4];
+    const Eigen::Vector2d outward = TagEdgeOutward(cells, k);
+    Eigen::Matrix<double, kSamples, 3> A;
+    Eigen::Matrix<double, kSamples, 1> d;
+    bool ok = true;
+    for (int j = 0; j < kSamples && ok; ++j) {
+      const double t = 0.15 + 0.7 * j / (kSamples - 1);
+      const Eigen::Vector2d base = a + t * (b - a);
+      double previous = -1.0, sum_g = 0.0, sum_gs = 0.0;
+      for (double s = -reach; s <= reach + 1e-9 && ok; s += kStep) {
+        const Eigen::Vector2d uv = ToPixel(fit.H, base + s * outward);
+        const double value = SampleBilinear(gray, uv.x(), uv.y());
+        ok = value >= 0.0;
+        if (ok && previous >= 0.0 && value > previous) {
+          sum_g += value - previous;
+          sum_gs += (value - previous) * (s - 0.5 * kStep);
+        }
+        previous = value;
+      }
+      ok = ok && sum_g > 0.0;
+      A(j, 0) = 1.0 - t;
+      A(j, 1) = t;
+      A(j, 2) = t * (1.0 - t);
+      d(j) = ok ? sum_gs / sum_g : 0.0;
+    }
+    if (!ok)
+      continue;
+    const Eigen::Vector3d x = A.colPivHouseholderQr().solve(d);
+    fit.ends[k] = x.head<2>();
+    fit.measured[k] = true;
+  }
+  return fit;
+}
+
+std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
+                                           const std::array<Eigen::Vector2d, 4>& corners,
+                                           int black_border, int cells) {
+  const std::array<Eigen::Vector2d, 4> cell = TagCellCorners(cells);
+  // Across the edge: inside stays in the black border, outside in the white gap.
+  const TagEdgeFit fit = FitTagEdges(gray, corners, cells, std::min(0.8 * black_border, 1.6));
+  const auto& ends = fit.ends;
+  const auto& measured = fit.measured;
+  const auto to_px = [&fit](const Eigen::Vector2d& x) { return ToPixel(fit.H, x); };
+  const double n = cells;
+  // Ends in px across their edge, with the tag's scale at each corner.
+  std::array<Eigen::Vector2d, 4> ends_px;
+  std::vector<double> all_ends;
+  for (size_t k = 0; k < 4; ++k) {
+    if (!measured[k])
+      continue;
+    const Eigen::Vector2d outward =
+        Eigen::Vector2d(-(cell[(k + 1) % 4] - cell[k]).y(), (cell[(k + 1) % 4] - cell[k]).x()) / n;
+    for (int e = 0; e < 2; ++e) {
+      const Eigen::Vector2d& c = cell[(k + static_cast<size_t>(e)) % 4];
+      ends_px[k](e) = ends[k](e) * (to_px(c + 0.5 * outward) - to_px(c - 0.5 * outward)).norm();
+      all_ends.push_back(ends_px[k](e));
+    }
+  }
+  // Ink spreads on the print and the camera's response is not linear: every edge of a real tag
+  // sits a common distance outside (or inside) the line through its X-junctions (0.3-0.6 px on
+  // EuRoC's views), which moves no X-junction. The median over the tag's edge ends is that
+  // distance; a corner's offset is what remains.
+  double spread = 0.0;
+  if (!all_ends.empty()) {
+    std::nth_element(all_ends.begin(), all_ends.begin() + static_cast<long>(all_ends.size() / 2),
+                     all_ends.end());
+    spread = all_ends[all_ends.size() / 2];
+  }
+  std::array<double, 4> offsets;
+  for (size_t k = 0; k < 4; ++k) {
+    const size_t before = (k + 3) % 4;  // the edge ending at corner k
+    offsets[k] = measured[k] && measured[before]
+                     ? std::hypot(ends_px[k](0) - spread, ends_px[before](1) - spread)
+                     : -1.0;
+  }
+  return offsets;
+}
+
 // Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
 // is the black border's width (and the corner square); the window stays inside it, and is at
 // least Kalibr's 5 x 5.
@@ -489,6 +626,46 @@ TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& 
     }
   }
   return tags;
+}
+
+// Drops every accepted tag with a corner off the tag's own edges (TagCornerEdgeOffsets). How well
+// the edges can be measured depends on the view (blur, ink, the camera's response: good corners
+// of real TUM-VI views sit up to 1 px off, those of rendered views within 0.6 px), so a tag is an
+// outlier when its largest offset exceeds both max_edge_offset_px and `kViewMedians` times the
+// view's median of that largest offset.
+void DropTagsOffTheirEdges(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
+                           DetectionResult* result) {
+  constexpr double kViewMedians = 4.0;
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  const TagCorners tags = TagsOfCorners(board, result->corners);
+  std::map<int, double> worst;
+  for (const auto& [id, uv] : tags) {
+    const std::array<double, 4> offsets = TagCornerEdgeOffsets(gray, uv, border, cells);
+    worst[id] = *std::max_element(offsets.begin(), offsets.end());
+  }
+  if (worst.empty())
+    return;
+  std::vector<double> values;
+  for (const auto& entry : worst)
+    values.push_back(entry.second);
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(values.size() / 2),
+                   values.end());
+  const double bound =
+      std::max(options.max_edge_offset_px, kViewMedians * values[values.size() / 2]);
+  for (const auto& [id, offset] : worst) {
+    if (!(offset > bound))
+      continue;
+    const std::array<int, 4> ids = board.TagCornerIds(id);
+    result->corners.erase(std::remove_if(result->corners.begin(), result->corners.end(),
+                                         [&ids](const DetectedCorner& c) {
+                                           return std::find(ids.begin(), ids.end(), c.id) !=
+                                                  ids.end();
+                                         }),
+                          result->corners.end());
+    --result->tags_accepted;
+    result->rejected.push_back({id, RejectReason::kOffEdges});
+  }
 }
 
 // Grid completion. libapriltag misses tags that a person sees at once: under fisheye distortion
@@ -571,21 +748,54 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
       const int half_window = TagCornerHalfWindow(border, bit_px);
       std::array<DetectedCorner, 4> refined;
       std::array<Eigen::Vector2d, 4> uv;
-      bool ok = true;
-      for (size_t k = 0; k < 4 && ok; ++k) {
-        const Eigen::Vector2d start(predicted[k].x, predicted[k].y);
-        uv[k] = start;
-        double sigma = 0.0;
-        ok = inside(start) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
-             (uv[k] - start).norm() <= bit_px && inside(uv[k]);
-        refined[k].id = ids[k];
-        refined[k].uv = uv[k];
-        refined[k].sigma = std::max(options.min_sigma_px, sigma);
-      }
-      if (!ok)
-        continue;
-      const int distance = TagCodeDistance(gray, uv, board, id);
-      if (distance < 0 || distance > 2)
+      // Refines the four corners from `starts` and reads the tag there.
+      const auto refine_from = [&](const std::array<Eigen::Vector2d, 4>& starts) {
+        bool ok = true;
+        for (size_t k = 0; k < 4 && ok; ++k) {
+          uv[k] = starts[k];
+          double sigma = 0.0;
+          ok = inside(starts[k]) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
+               (uv[k] - starts[k]).norm() <= bit_px && inside(uv[k]);
+          refined[k].id = ids[k];
+          refined[k].uv = uv[k];
+          refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
+        }
+        if (!ok)
+          return false;
+        // Compared with the one code word printed there (not searched among all 587): 3 wrong
+        // bits of 36 pass by chance with probability 1e-7, and blur at a fisheye's rim costs
+        // a bit or two more than libapriltag's own quads see.
+        const int distance = TagCodeDistance(gray, uv, board, id);
+        return distance >= 0 && distance <= 3;
+      };
+      std::array<Eigen::Vector2d, 4> starts;
+      for (size_t k = 0; k < 4; ++k)
+        starts[k] = Eigen::Vector2d(predicted[k].x, predicted[k].y);
+      // Where the neighbour's homography extrapolates badly (the strongest distortion at a
+      // fisheye's rim, where the spacing shrinks tag by tag: 5-7 px off on TUM-VI's top.png),
+      // three accepted tags in a line before it extrapolate each corner with that shrinking:
+      // equal steps on the board, so p = 3 p_1 - 3 p_2 + p_3 is exact for a quadratic.
+      const auto from_line = [&](std::array<Eigen::Vector2d, 4>* out) {
+        const int r = id / cols, c = id % cols;
+        for (const auto& [dr, dc] : std::vector<std::pair<int, int>>{
+                 {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {-1, 1}, {1, -1}, {1, 1}}) {
+          std::array<const std::array<Eigen::Vector2d, 4>*, 3> line{};
+          bool complete = true;
+          for (int step = 1; step <= 3 && complete; ++step) {
+            const int rr = r + step * dr, cc = c + step * dc;
+            complete = rr >= 0 && cc >= 0 && rr < rows && cc < cols && found.count(rr * cols + cc);
+            if (complete)
+              line[static_cast<size_t>(step - 1)] = &found.at(rr * cols + cc);
+          }
+          if (!complete)
+            continue;
+          for (size_t k = 0; k < 4; ++k)
+            (*out)[k] = 3.0 * (*line[0])[k] - 3.0 * (*line[1])[k] + (*line[2])[k];
+          return true;
+        }
+        return false;
+      };
+      if (!refine_from(starts) && !(from_line(&starts) && refine_from(starts)))
         continue;
       found[id] = uv;
       result->corners.insert(result->corners.end(), refined.begin(), refined.end());
@@ -817,8 +1027,49 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   // The 8-bit quantisation alone is uniform noise of 1/sqrt(12) grey levels.
   const double noise_sigma =
       options_.refine ? std::max(EstimateNoiseSigma(gray), 1.0 / std::sqrt(12.0)) : 0.0;
-  return board_.type() == TargetType::kAprilGrid ? DetectAprilGrid(gray, noise_sigma)
-                                                 : DetectCheckerboard(gray, noise_sigma);
+  switch (board_.type()) {
+    case TargetType::kAprilGrid:
+      result = DetectAprilGrid(gray, noise_sigma);
+      break;
+    case TargetType::kCheckerboard:
+      result = DetectCheckerboard(gray, noise_sigma);
+      break;
+    case TargetType::kCharuco:
+      result = DetectCharuco(gray, noise_sigma);
+      break;
+  }
+  if (options_.refine && result.board_found)
+    AddModelError(&result);
+  return result;
+}
+
+// The refinement's sigma propagates image noise only. The corners of a view also carry errors
+// that no noise term sees: the refinement's model of an X-junction against the real blurred one,
+// the print, the lens' point-spread. Their size shows in how far the corners scatter about a
+// smooth grid (EstimateGridScatter); what exceeds the noise is this view's model error, added in
+// quadrature to every corner's noise sigma.
+void Detector::AddModelError(DetectionResult* result) const {
+  const GridScatter scatter = EstimateGridScatter(board_, result->corners);
+  double noise2 = 0.0;
+  for (const DetectedCorner& c : result->corners)
+    noise2 += c.sigma * c.sigma / static_cast<double>(result->corners.size());
+  result->grid_scatter_px =
+      scatter.windows >= options_.min_scatter_windows ? scatter.sigma_px : 0.0;
+  const double model2 = scatter.windows >= options_.min_scatter_windows
+                            ? std::max(0.0, scatter.sigma_px * scatter.sigma_px - noise2)
+                            : options_.default_model_sigma_px * options_.default_model_sigma_px;
+  result->model_sigma_px = std::sqrt(model2);
+  for (DetectedCorner& c : result->corners)
+    c.sigma = std::max(options_.min_sigma_px, std::sqrt(c.sigma * c.sigma + model2));
+  // Corners that scatter by pixels about every row and column are not where this board's file
+  // puts them: a board of another size in view (Kalibr's sample grid read with a 6 x 6 file: 29
+  // tags, 38 px; with the right 8-column file 2.4 px), whose ids still decode. No observation
+  // rather than a wrong one.
+  if (result->grid_scatter_px > options_.max_grid_scatter_px) {
+    result->rejected.push_back({-1, RejectReason::kNotThisBoard});
+    result->corners.clear();
+    result->board_found = false;
+  }
 }
 
 DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {
@@ -885,7 +1136,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
           ok = false;
           break;
         }
-        refined[k].sigma = std::max(options_.min_sigma_px, sigma);
+        refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
       }
       // A refined corner that landed on another junction shifts the bit grid near it: the tag
       // must still read as its code word at the refined corners.
@@ -965,6 +1216,8 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
     keep_better(std::move(full));
   }
   ReleaseTagContext(std::move(context));
+  if (options_.refine)
+    DropTagsOffTheirEdges(gray, board_, options_, &result);
   if (result.tags_accepted < options_.min_tags) {
     if (result.tags_accepted > 0)
       result.rejected.push_back({-1, RejectReason::kTooFewTags});
@@ -1038,7 +1291,7 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
       if (RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) &&
           (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
-        corner.sigma = std::max(options_.min_sigma_px, sigma);
+        corner.sigma = sigma;  // noise only; Detect adds the view's model error
       } else {
         result.rejected.push_back({id, RejectReason::kRefinementJump});
         continue;
@@ -1046,6 +1299,96 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
     }
     result.corners.push_back(corner);
   }
+  result.board_found = !result.corners.empty();
+  return result;
+}
+
+// ChArUco through OpenCV's aruco module: markers (detectMarkers), then the chessboard corners
+// between them (interpolateCornersCharuco: a local homography of the adjacent markers, then
+// cornerSubPix), then our refinement for every corner (window and jump bound from the square's
+// size in pixels, as for checkerboards) and Kalibr's rules: markers the board does not have
+// (kUnknownId), corners near the image border, fewer than min_tags markers in the view.
+DetectionResult Detector::DetectCharuco(const cv::Mat& gray, double noise_sigma) const {
+  DetectionResult result;
+  const TargetConfig& config = board_.config();
+  const cv::Ptr<cv::aruco::Dictionary> dictionary =
+      cv::aruco::getPredefinedDictionary(ArucoDictionaryId(config.dictionary));
+  const cv::Ptr<cv::aruco::CharucoBoard> charuco = cv::aruco::CharucoBoard::create(
+      config.squares_x, config.squares_y, static_cast<float>(config.square_length_m),
+      static_cast<float>(config.marker_length_m), dictionary);
+  std::vector<std::vector<cv::Point2f>> marker_corners, candidates;
+  std::vector<int> marker_ids;
+  const cv::Ptr<cv::aruco::DetectorParameters> parameters = cv::aruco::DetectorParameters::create();
+  cv::aruco::detectMarkers(gray, dictionary, marker_corners, marker_ids, parameters, candidates);
+  result.tags_detected = static_cast<int>(marker_ids.size());
+  // Markers the board does not carry: another board in view, or the wrong file.
+  std::set<int> on_board(charuco->ids.begin(), charuco->ids.end());
+  std::map<int, int> count;
+  for (int id : marker_ids)
+    ++count[id];
+  std::vector<std::vector<cv::Point2f>> kept_corners;
+  std::vector<int> kept_ids;
+  for (size_t i = 0; i < marker_ids.size(); ++i) {
+    const int id = marker_ids[i];
+    if (!on_board.count(id)) {
+      result.rejected.push_back({id, RejectReason::kUnknownId});
+    } else if (count[id] > 1) {
+      result.rejected.push_back({id, RejectReason::kDuplicateId});
+    } else {
+      kept_corners.push_back(marker_corners[i]);
+      kept_ids.push_back(id);
+    }
+  }
+  result.tags_accepted = static_cast<int>(kept_ids.size());
+  if (result.tags_accepted < options_.min_tags) {
+    if (result.tags_accepted > 0)
+      result.rejected.push_back({-1, RejectReason::kTooFewTags});
+    return result;
+  }
+  std::vector<cv::Point2f> charuco_corners;
+  std::vector<int> charuco_ids;
+  cv::aruco::interpolateCornersCharuco(kept_corners, kept_ids, gray, charuco, charuco_corners,
+                                       charuco_ids);
+  // Scale: the markers' mean side in pixels, over the marker's share of a square.
+  double marker_px = 0.0;
+  for (const std::vector<cv::Point2f>& q : kept_corners) {
+    for (size_t k = 0; k < 4; ++k)
+      marker_px +=
+          cv::norm(q[k] - q[(k + 1) % 4]) / (4.0 * static_cast<double>(kept_corners.size()));
+  }
+  const double square_px = marker_px * config.square_length_m / config.marker_length_m;
+  // The markers' black borders start (squareLength - markerLength) / 2 from the corner's squares
+  // (an eighth of a square on common boards): the window stays inside that margin.
+  const double margin_sq =
+      0.5 * (config.square_length_m - config.marker_length_m) / config.square_length_m;
+  const int half_window = std::clamp(static_cast<int>(margin_sq * square_px), 2, 12);
+  const double max_jump = std::max(options_.max_refinement_jump_px, 0.2 * square_px);
+  const double margin = options_.min_border_distance_px;
+  for (size_t i = 0; i < charuco_ids.size(); ++i) {
+    DetectedCorner corner;
+    corner.id = charuco_ids[i];
+    corner.uv = Eigen::Vector2d(charuco_corners[i].x, charuco_corners[i].y);
+    corner.sigma = options_.default_sigma_px;
+    if (corner.uv.x() < margin || corner.uv.y() < margin ||
+        corner.uv.x() > gray.cols - 1 - margin || corner.uv.y() > gray.rows - 1 - margin) {
+      result.rejected.push_back({corner.id, RejectReason::kNearBorder});
+      continue;
+    }
+    if (options_.refine) {
+      Eigen::Vector2d uv = corner.uv;
+      double sigma = 0.0;
+      if (!RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) ||
+          (uv - corner.uv).norm() > max_jump) {
+        result.rejected.push_back({corner.id, RejectReason::kRefinementJump});
+        continue;
+      }
+      corner.uv = uv;
+      corner.sigma = sigma;  // noise only; Detect adds the view's model error
+    }
+    result.corners.push_back(corner);
+  }
+  std::sort(result.corners.begin(), result.corners.end(),
+            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
   result.board_found = !result.corners.empty();
   return result;
 }

@@ -38,6 +38,22 @@ T Required(const YAML::Node& node, const std::string& key, const std::string& co
 
 }  // namespace
 
+int ArucoDictionaryId(const std::string& name) {
+  // cv::aruco::PREDEFINED_DICTIONARY_NAME, in its order (OpenCV 4.6).
+  static const char* const kNames[] = {
+      "DICT_4X4_50",         "DICT_4X4_100",       "DICT_4X4_250",       "DICT_4X4_1000",
+      "DICT_5X5_50",         "DICT_5X5_100",       "DICT_5X5_250",       "DICT_5X5_1000",
+      "DICT_6X6_50",         "DICT_6X6_100",       "DICT_6X6_250",       "DICT_6X6_1000",
+      "DICT_7X7_50",         "DICT_7X7_100",       "DICT_7X7_250",       "DICT_7X7_1000",
+      "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9", "DICT_APRILTAG_36h10",
+      "DICT_APRILTAG_36h11"};
+  for (int i = 0; i < static_cast<int>(sizeof(kNames) / sizeof(kNames[0])); ++i) {
+    if (name == kNames[i])
+      return i;
+  }
+  return -1;
+}
+
 TargetConfig ParseTargetConfig(const YAML::Node& node, const std::string& context) {
   if (!node || !node.IsMap())
     Fail(context, "expected a map with target_type and its keys");
@@ -78,8 +94,26 @@ TargetConfig ParseTargetConfig(const YAML::Node& node, const std::string& contex
     if (!(t.row_spacing_m > 0.0) || !(t.col_spacing_m > 0.0)) {
       Fail(context, "rowSpacingMeters and colSpacingMeters must be > 0");
     }
+  } else if (type == "charuco") {
+    t.type = TargetType::kCharuco;
+    allowed.insert({"squaresX", "squaresY", "squareLength", "markerLength", "dictionary"});
+    t.squares_x = Required<int>(node, "squaresX", context);
+    t.squares_y = Required<int>(node, "squaresY", context);
+    t.square_length_m = Required<double>(node, "squareLength", context);
+    t.marker_length_m = Required<double>(node, "markerLength", context);
+    if (node["dictionary"])
+      t.dictionary = Required<std::string>(node, "dictionary", context);
+    if (t.squares_x < 2 || t.squares_y < 2)
+      Fail(context, "squaresX and squaresY must be >= 2");
+    if (!(t.square_length_m > 0.0))
+      Fail(context, "squareLength must be > 0 (metres)");
+    if (!(t.marker_length_m > 0.0) || !(t.marker_length_m < t.square_length_m))
+      Fail(context, "markerLength must be > 0 and < squareLength (metres)");
+    if (ArucoDictionaryId(t.dictionary) < 0)
+      Fail(context, "unknown dictionary '" + t.dictionary + "' (OpenCV's names, e.g. DICT_4X4_50)");
   } else {
-    Fail(context, "unknown target_type '" + type + "' (expected aprilgrid or checkerboard)");
+    Fail(context,
+         "unknown target_type '" + type + "' (expected aprilgrid, checkerboard or charuco)");
   }
   for (const auto& kv : node) {
     const std::string key = kv.first.as<std::string>();
@@ -111,6 +145,13 @@ void EmitTargetConfig(const TargetConfig& t, YAML::Emitter& out) {
     out << YAML::Key << "tagSize" << YAML::Value << Shortest(t.tag_size);
     out << YAML::Key << "tagSpacing" << YAML::Value << Shortest(t.tag_spacing);
     out << YAML::Key << "blackTagBorder" << YAML::Value << t.black_tag_border;
+  } else if (t.type == TargetType::kCharuco) {
+    out << YAML::Key << "target_type" << YAML::Value << "charuco";
+    out << YAML::Key << "squaresX" << YAML::Value << t.squares_x;
+    out << YAML::Key << "squaresY" << YAML::Value << t.squares_y;
+    out << YAML::Key << "squareLength" << YAML::Value << Shortest(t.square_length_m);
+    out << YAML::Key << "markerLength" << YAML::Value << Shortest(t.marker_length_m);
+    out << YAML::Key << "dictionary" << YAML::Value << t.dictionary;
   } else {
     out << YAML::Key << "target_type" << YAML::Value << "checkerboard";
     out << YAML::Key << "targetCols" << YAML::Value << t.target_cols;

@@ -4,7 +4,9 @@
 // the sensor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -108,6 +110,36 @@ TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
   // The simulator's corners carry no outliers: the 99.9 % gate removes about 0.1 %.
   for (const CameraOutliers& o : r.outliers)
     EXPECT_LT(o.removed, o.corners / 200) << o.camera;
+}
+
+// The stop criterion of the plain solves (SplineCalibratorOptions::stop_cost_change) bounds every
+// estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1 of its sigma; the run
+// without it (Ceres' relative tolerances of 1e-10 only) is the reference.
+TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate) {
+  const Loaded l = Load(SimulatedData(11, 12.0));
+  SplineCalibratorOptions options;
+  options.threads = 2;
+  options.report_data = false;
+  SplineCalibratorOptions converged = options;
+  converged.stop_cost_change = 0.0;
+  const SplineCalibrationResult fast = CalibrateSpline(l.rig, l.data, options, Quiet());
+  const SplineCalibrationResult ref = CalibrateSpline(l.rig, l.data, converged, Quiet());
+  EXPECT_LE(fast.iterations, ref.iterations);
+  // error = fast - reference, sigma = fast's.
+  const Comparison c = CompareRigs(ref.result, fast.result);
+  ASSERT_EQ(c.summary.count, 98);
+  int compared = 0;
+  double worst = 0.0;
+  for (const ComparisonRow& row : c.rows) {
+    if (!row.error_over_sigma.has_value())
+      continue;  // cam1's undetermined k2..k4 (see above)
+    ++compared;
+    worst = std::max(worst, std::abs(*row.error_over_sigma));
+    EXPECT_LT(std::abs(*row.error_over_sigma), 0.1) << row.name << ": " << row.error;
+  }
+  EXPECT_GE(compared, 95);
+  std::printf("stop criterion: %d vs %d iterations, worst |fast - converged| %.4f sigma\n",
+              fast.iterations, ref.iterations, worst);
 }
 
 template <class F>

@@ -4,10 +4,15 @@
 // of the planar pose ambiguity is off by several degrees).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
+#include "../../calibrator/src/spline_trajectory_fit.h"
+#include "ctcal/calibrator/calibration_state.h"
 #include "ctcal/calibrator/spline_init.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -55,6 +60,90 @@ TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
     }
     EXPECT_GT(compared, 0) << name;
   }
+}
+
+// The initial trajectory fit (spline_trajectory_fit.h) on the true calibration: from knots at the
+// nearest board-view pose (errors of degrees and centimetres between views), Gauss-Newton on the
+// poses and the base IMU (corrected by its true intrinsics and biases) must recover the simulated
+// trajectory to the IMU's precision between the views and gravity's direction.
+TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
+  const std::string dir = ::testing::TempDir() + "/ctcal_spline_init_21";
+  const std::string cmd = std::string(CTCAL_BINARY) +
+                          " simulate --scenario full --seed 21 --duration 3 --out " + dir +
+                          " > /dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::vector<std::string> warnings;
+  const RigConfig truth = LoadRig(dir + "/truth.yaml", &warnings);
+  const auto data = LoadDataset(dir, truth, &warnings);
+  const std::vector<GroundTruthState> gt = ReadGroundTruthCsv(dir + "/groundtruth/data.csv");
+  const Board board(truth.target);
+  std::vector<TimedPose> poses;
+  for (const char* name : {"cam0", "cam1"}) {
+    const SensorConfig& c = *truth.Find(name);
+    const CameraModel camera =
+        CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
+                            Eigen::Vector2i(c.width, c.height));
+    Eigen::Isometry3d T_B_C = Eigen::Isometry3d::Identity();
+    T_B_C.matrix() = c.T_B_S;
+    const std::vector<TimedPose> p = BasePosesFromViews(
+        EstimateBoardViews(camera, board, data.at(name).corners, 8), T_B_C, c.time_offset);
+    poses.insert(poses.end(), p.begin(), p.end());
+  }
+  std::sort(poses.begin(), poses.end(),
+            [](const TimedPose& a, const TimedPose& b) { return a.t_ns < b.t_ns; });
+  ASSERT_GT(poses.size(), 80u);
+
+  // The base IMU's samples with the truth's intrinsics and the simulator's biases (the ground
+  // truth is stamped at the base IMU's samples).
+  CalibrationState state(truth);
+  const SensorState& base = *state.Find(truth.base_imu);
+  std::map<std::int64_t, const GroundTruthState*> truth_at;
+  for (const GroundTruthState& g : gt)
+    truth_at[g.t_ns] = &g;
+  std::vector<spline_internal::BaseRateSample> imu;
+  for (const ImuSample& s : data.at(truth.base_imu).imu) {
+    const auto it = truth_at.find(s.t_ns);
+    ASSERT_NE(it, truth_at.end()) << s.t_ns;
+    spline_internal::BaseRateSample z;
+    z.t_ns = s.t_ns;
+    base.imu->TrueFromRaw(s.w_m, s.a_m, it->second->b_g, it->second->b_a, &z.w_I, &z.a_I);
+    imu.push_back(z);
+  }
+
+  using Fit = spline_internal::TrajectoryFit<4, Se3Representation::kSplit>;
+  const std::int64_t t0 = poses.front().t_ns, t1 = poses.back().t_ns;
+  const std::int64_t dt = 30000000;  // 30 ms, the demo's spacing: < 2 views per knot interval
+  Se3Spline<4> spline(KnotTiming{t0, dt}, static_cast<int>((t1 - t0) / dt) + 4);
+  Fit::SeedKnots(poses, &spline);
+  Eigen::Vector3d g_W(0.0, 0.0, -9.81);
+  const spline_internal::TrajectoryFitReport report =
+      Fit(poses, imu, spline_internal::TrajectoryFitOptions{}).Run(&spline, &g_W);
+  EXPECT_LT(report.final_cost, 1e-2 * report.initial_cost);
+  EXPECT_GT(report.iterations, 0);
+
+  double max_deg = 0.0, max_m = 0.0;
+  for (const GroundTruthState& g : gt) {
+    if (g.t_ns < spline.MinTimeNs() || g.t_ns > spline.MaxTimeNs())
+      continue;
+    const Se3Kinematics<double> kin = spline.Evaluate(g.t_ns, 0);
+    max_deg =
+        std::max(max_deg, RotationError<double>(Eigen::Quaterniond(kin.R_W_B), g.q_W_B).norm() *
+                              180.0 / M_PI);
+    max_m = std::max(max_m, (kin.p_W_B - g.p_W_B).norm());
+  }
+  // PnP poses are ~0.3 deg / ~5 mm apart from the truth each; the fit averages them under the
+  // IMU's shape.
+  EXPECT_LT(max_deg, 0.3);
+  EXPECT_LT(max_m, 0.01);
+  ASSERT_TRUE(truth.gravity_W.has_value());
+  const double g_deg =
+      std::acos(std::min(1.0, g_W.normalized().dot(truth.gravity_W->normalized()))) * 180.0 / M_PI;
+  EXPECT_LT(g_deg, 0.1);
+  EXPECT_NEAR(g_W.norm(), truth.gravity_W->norm(), 0.05);
+  std::printf(
+      "trajectory fit: max rotation error %.3f deg, position %.2f mm, gravity %.3f deg, "
+      "%d iterations\n",
+      max_deg, 1e3 * max_m, g_deg, report.iterations);
 }
 
 }  // namespace

@@ -67,37 +67,51 @@ class Cli : public ::testing::Test {
 const char* kSmallGrid =
     "target_type: aprilgrid\ntagCols: 3\ntagRows: 2\ntagSize: 0.03\ntagSpacing: 0.3\n";
 
+// The printed PDF rasterised at 200 dpi and detected again: an AprilGrid, and a ChArUco board
+// (its markers must decode from the print, its corners sit where OpenCV's board puts them).
 TEST_F(Cli, PrintedPdfDetectsWithTheRightIdsAndScale) {
   if (Shell("command -v pdftoppm").code != 0)
     GTEST_SKIP() << "pdftoppm (poppler-utils) is not installed";
-  const std::string target = WriteTarget(kSmallGrid);
-  const std::string pdf = (dir_ / "board.pdf").string();
-  const ShellRun made =
-      Shell(std::string(CTCAL_BINARY) + " target --target " + target + " --out " + pdf);
-  ASSERT_EQ(made.code, 0) << made.out;
-  const double dpi = 200.0;
-  const ShellRun raster =
-      Shell("pdftoppm -r 200 -gray -png -singlefile " + pdf + " " + (dir_ / "board").string());
-  ASSERT_EQ(raster.code, 0) << raster.out;
-  const cv::Mat image = cv::imread((dir_ / "board.png").string(), cv::IMREAD_UNCHANGED);
-  ASSERT_FALSE(image.empty());
+  struct Case {
+    std::string yaml;
+    int tags;  // tags or markers
+    size_t corners;
+  };
+  for (const Case& test :
+       {Case{kSmallGrid, 6, 24},
+        Case{"target_type: charuco\nsquaresX: 5\nsquaresY: 4\nsquareLength: 0.03\n"
+             "markerLength: 0.022\ndictionary: DICT_4X4_50\n",
+             10, 12}}) {
+    const std::string target = WriteTarget(test.yaml);
+    const std::string pdf = (dir_ / "board.pdf").string();
+    const ShellRun made =
+        Shell(std::string(CTCAL_BINARY) + " target --target " + target + " --out " + pdf);
+    ASSERT_EQ(made.code, 0) << made.out;
+    const double dpi = 200.0;
+    const ShellRun raster =
+        Shell("pdftoppm -r 200 -gray -png -singlefile " + pdf + " " + (dir_ / "board").string());
+    ASSERT_EQ(raster.code, 0) << raster.out;
+    const cv::Mat image = cv::imread((dir_ / "board.png").string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(image.empty());
 
-  const Board board(LoadTargetConfig(target));
-  const DetectionResult result = Detector(board).Detect(image);
-  ASSERT_EQ(result.tags_accepted, 6);
-  ASSERT_EQ(result.corners.size(), 24u);
-  // Printed upright: board x right, y up, so pixel u = s * x + u0 and v = v0 - s * y with
-  // s = dpi / 25.4 mm, for every corner (ids in place, no mirror, true scale).
-  const double s = dpi / 0.0254;
-  const Eigen::Vector2d origin = result.corners.front().uv;  // corner 0
-  ASSERT_EQ(result.corners.front().id, 0);
-  double worst = 0.0;
-  for (const DetectedCorner& c : result.corners) {
-    const Eigen::Vector3d& p = board.Corner(c.id);
-    const Eigen::Vector2d expected = origin + Eigen::Vector2d(s * p.x(), -s * p.y());
-    worst = std::max(worst, (c.uv - expected).norm());
+    const Board board(LoadTargetConfig(target));
+    const DetectionResult result = Detector(board).Detect(image);
+    ASSERT_EQ(result.tags_accepted, test.tags) << test.yaml;
+    ASSERT_EQ(result.corners.size(), test.corners) << test.yaml;
+    // Printed upright: board x right, y up, so pixel u = u0 + s * (x - x0) and
+    // v = v0 - s * (y - y0) with s = dpi / 25.4 mm, for every corner (ids in place, no mirror,
+    // true scale).
+    const double s = dpi / 0.0254;
+    const Eigen::Vector2d origin = result.corners.front().uv;  // corner 0
+    ASSERT_EQ(result.corners.front().id, 0);
+    double worst = 0.0;
+    for (const DetectedCorner& c : result.corners) {
+      const Eigen::Vector3d p = board.Corner(c.id) - board.Corner(0);
+      const Eigen::Vector2d expected = origin + Eigen::Vector2d(s * p.x(), -s * p.y());
+      worst = std::max(worst, (c.uv - expected).norm());
+    }
+    EXPECT_LT(worst, 1.0) << test.yaml;  // 1 px at 200 dpi = 0.13 mm over a 0.11-0.15 m board
   }
-  EXPECT_LT(worst, 1.0);  // 1 px at 200 dpi = 0.13 mm over the 0.11 m board
 }
 
 TEST_F(Cli, TargetRejectsABadTargetFile) {

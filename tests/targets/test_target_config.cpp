@@ -78,5 +78,45 @@ TEST(TargetConfig, BadFilesNameTheFileAndKey) {
   std::remove(path.c_str());
 }
 
+// ChArUco (docs/targets.md: OpenCV's names): a round trip, and bad values named with their key.
+TEST(TargetConfig, CharucoRoundTripAndBadValues) {
+  TargetConfig t;
+  t.type = TargetType::kCharuco;
+  t.squares_x = 7;
+  t.squares_y = 5;
+  t.square_length_m = 0.04;
+  t.marker_length_m = 0.03;
+  t.dictionary = "DICT_5X5_100";
+  const std::string text = Emit(t);
+  const TargetConfig back = ParseTargetConfig(YAML::Load(text), "test");
+  EXPECT_EQ(back.type, TargetType::kCharuco);
+  EXPECT_EQ(back.squares_x, 7);
+  EXPECT_EQ(back.squares_y, 5);
+  EXPECT_EQ(back.square_length_m, 0.04);
+  EXPECT_EQ(back.marker_length_m, 0.03);
+  EXPECT_EQ(back.dictionary, "DICT_5X5_100");
+  EXPECT_EQ(ArucoDictionaryId("DICT_4X4_50"), 0);
+  EXPECT_EQ(ArucoDictionaryId("DICT_APRILTAG_36h11"), 20);
+  EXPECT_EQ(ArucoDictionaryId("DICT_9X9"), -1);
+  const auto message = [](const std::string& yaml) {
+    try {
+      ParseTargetConfig(YAML::Load(yaml), "board.yaml");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string base =
+      "{target_type: charuco, squaresX: 7, squaresY: 5, squareLength: 0.04, markerLength: ";
+  EXPECT_NE(message(base + "0.05}").find("markerLength"), std::string::npos);
+  EXPECT_NE(message(base + "0.03, dictionary: DICT_9X9}").find("unknown dictionary 'DICT_9X9'"),
+            std::string::npos);
+  EXPECT_NE(message("{target_type: charuco, squaresX: 7, squaresY: 5, squareLength: 0.04}")
+                .find("missing required key 'markerLength'"),
+            std::string::npos);
+  EXPECT_NE(message(base + "0.03, tagSize: 1}").find("unknown key 'tagSize' for charuco"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace ctcal

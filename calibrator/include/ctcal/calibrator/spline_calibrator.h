@@ -4,8 +4,8 @@
 //
 // Stages, each separable so that a coarse-guess initialisation can replace the first one:
 //   1. initialise: board poses by PnP per camera frame, base poses T_W_B = T_W_C T_B_C^-1 at
-//      stamp + time_offset, the trajectory spline fitted to them, gravity from the
-//      accelerometers against the spline, biases 0 (spline_init.h);
+//      stamp + time_offset, the trajectory spline and gravity fitted to them and to the base
+//      IMU (spline_init.h, src/spline_trajectory_fit.h), biases seeded by the initialisation;
 //   2. robust solve (Huber on the whitened corner residuals);
 //   3. outliers removed (whitened corner residual beyond the chi-square gate), plain L2 solve,
 //      residuals re-bucketed onto the spline segment their time offsets now select, re-solved;
@@ -61,6 +61,12 @@ struct SplineCalibratorOptions {
   int min_corners_per_view = 8;
   int min_views = 10;
   int max_rebucket_rounds = 3;
+  // The plain solves stop once a step would lower the cost F (1/2 sum of squared whitened
+  // residuals) by less than this. Near the optimum a Gauss-Newton step lands on it and lowers F by
+  // 1/2 |x - x*|^2 in the information metric, which bounds every scalar's distance to the
+  // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. 0: Ceres'
+  // relative tolerances of 1e-10 alone (the fully converged reference).
+  double stop_cost_change = 0.005;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.

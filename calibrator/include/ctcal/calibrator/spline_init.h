@@ -1,7 +1,7 @@
 // Initialisation of the continuous-time calibration from a close guess: board poses per camera
-// frame, base poses from them, and gravity from the accelerometers. The spline fit itself is a
-// template of the problem (src/spline_problem_impl.h). A coarse-guess initialisation (time offsets
-// by cross-correlation, hand-eye) slots in before these functions.
+// frame and base poses from them. The spline and gravity fit to those poses and the base IMU is
+// private to the calibrator (src/spline_trajectory_fit.h). A coarse-guess initialisation (time
+// offsets by cross-correlation, hand-eye) slots in before these functions.
 #pragma once
 
 #include <Eigen/Geometry>

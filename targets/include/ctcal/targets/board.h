@@ -26,7 +26,8 @@ class Board {
   TargetType type() const { return config_.type; }
 
   // The point grid: 2*tagRows x 2*tagCols for an AprilGrid, targetRows x targetCols inner corners
-  // for a checkerboard. Point (r, c) has id r * cols() + c.
+  // for a checkerboard, (squaresY - 1) x (squaresX - 1) inner corners for a ChArUco board
+  // (OpenCV's ids; positions with y flipped, docs/targets.md). Point (r, c) has id r * cols() + c.
   int rows() const { return rows_; }
   int cols() const { return cols_; }
   int NumCorners() const { return rows_ * cols_; }
@@ -46,6 +47,15 @@ class Board {
   // Edge of one bit cell of a tag (m): tagSize / (6 + 2 * blackTagBorder).
   double TagBitSize() const;
 
+  // ChArUco only: the ArUco markers in the white squares, as OpenCV's CharucoBoard places them.
+  struct Marker {
+    int id = -1;                                         // in the board's dictionary
+    Eigen::Vector2d top_left = Eigen::Vector2d::Zero();  // m, board frame (y up): largest y
+  };
+  const std::vector<Marker>& Markers() const { return markers_; }
+  // Cells per marker side, its 1-cell black border included (markerSize + 2).
+  int MarkerCells() const { return marker_bits_ + 2; }
+
   // The printed pattern's bounding box in the board plane (m), corner squares included.
   Eigen::AlignedBox2d PatternBox() const;
   // The smallest printed feature (m): a tag bit or a checkerboard square; sets sampling rates.
@@ -56,12 +66,19 @@ class Board {
  private:
   bool AprilGridIsBlack(double x, double y) const;
   bool CheckerboardIsBlack(double x, double y) const;
+  bool CharucoIsBlack(double x, double y) const;
 
   TargetConfig config_;
   int rows_ = 0;
   int cols_ = 0;
   std::vector<Eigen::Vector3d> corners_W_;
   std::vector<uint64_t> tag_codes_;
+  // ChArUco: markers, the marker in each square (squaresX * row + col; -1: a black square) and
+  // each marker's data bits (row-major from its top-left, 1 = white).
+  std::vector<Marker> markers_;
+  std::vector<int> marker_of_square_;
+  int marker_bits_ = 0;
+  std::vector<std::vector<uint8_t>> marker_data_;
 };
 
 }  // namespace ctcal

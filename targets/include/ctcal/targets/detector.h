@@ -39,10 +39,25 @@ struct DetectorOptions {
   // px per bit were off by ~1 px). Set between that and the simulator's 512x512 fisheye, whose
   // tags at ~1.7 px per bit have corners within 0.17 px (95 %); tests/sim/test_images.cpp.
   double min_bit_px = 1.6;
-  // Sub-pixel refinement on/off, and the floor of the reported sigma (px): a noise-free image
-  // gives a near-zero residual, which would claim more than the model of the corner can deliver.
+  // A tag with a refined corner farther than this from its own edges (measured across each edge
+  // along its middle, extrapolated to the corner) is dropped: on oblique fisheye views a corner
+  // can slide along a narrow bit onto the corner square and still pass the jump bound and the
+  // code check. On rendered double-sphere views good corners sit within 0.56 px (99.9 %), corners
+  // more than 1 px off at 0.73-2.9 px (docs/targets.md).
+  double max_edge_offset_px = 0.75;
+  // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
+  // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
   bool refine = true;
-  double min_sigma_px = 0.03;
+  double min_sigma_px = 0.01;
+  // The model error is measured only on views with at least this many grid fits (5 corners in a
+  // row or column each); on others it is taken as default_model_sigma_px (rendered views: 0.02-
+  // 0.05 px, real EuRoC and TUM-VI views 0.04 px, docs/targets.md).
+  int min_scatter_windows = 12;
+  double default_model_sigma_px = 0.04;
+  // A view whose corners scatter about the board's grid by more than this (px) is not this board
+  // (rendered and real views with the right file: 0.02-2.8 px, Kalibr's blurred sample images
+  // the most; a grid read with a file of another column count: 11-140 px).
+  double max_grid_scatter_px = 5.0;
   // Reported when no refinement ran (px).
   double default_sigma_px = 0.5;
   // libapriltag's quad search on an image decimated by this factor (corners are then fitted at
@@ -62,7 +77,10 @@ enum class RejectReason {
                     // longer reads as its code word at the refined corners
   kBadBorder,       // decoded, but its black border is not blackTagBorder bits wide
   kTooSmall,        // fewer than min_bit_px pixels per bit: too small to refine its corners
+  kOffEdges,        // a refined corner lies off the tag's own edges (max_edge_offset_px)
   kTooFewTags,      // the whole view: fewer than min_tags tags left
+  kNotThisBoard,    // the whole view: corners scatter about the grid by more than
+                    // max_grid_scatter_px (a board of another size in view)
 };
 const char* ToString(RejectReason reason);
 
@@ -74,10 +92,14 @@ struct TagRejection {
 struct DetectionResult {
   bool board_found = false;             // a valid observation of the board (corners non-empty)
   std::vector<DetectedCorner> corners;  // sorted by id
-  int tags_detected = 0;                // tags decoded before the rules (AprilGrid)
+  int tags_detected = 0;  // tags (AprilGrid) or markers (ChArUco) decoded before the rules
   int tags_accepted = 0;
   std::vector<TagRejection> rejected;
   std::string error;  // set when the image could not be used at all (unreadable, empty)
+  // The corners' scatter about a smooth grid (EstimateGridScatter; 0 when too few corners to
+  // tell) and the model error taken from it, which every corner's sigma includes (px).
+  double grid_scatter_px = 0.0;
+  double model_sigma_px = 0.0;
 };
 
 class Detector {
@@ -107,6 +129,8 @@ class Detector {
   // noise_sigma: the image's noise (grey levels), for the corners' sigma.
   DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
+  DetectionResult DetectCharuco(const cv::Mat& gray, double noise_sigma) const;
+  void AddModelError(DetectionResult* result) const;
 
   Board board_;
   DetectorOptions options_;
@@ -139,6 +163,15 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 // noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv,
                   double* sigma_px = nullptr, double noise_sigma = 1.0);
+
+// How far the corners of one view scatter about a smooth grid (px per coordinate), estimated from
+// the view alone: polynomials fitted along the rows and columns of the point grid, the median of
+// their residuals (docs/targets.md). `windows`: how many fits it rests on (0: sigma_px unknown).
+struct GridScatter {
+  double sigma_px = 0.0;
+  int windows = 0;
+};
+GridScatter EstimateGridScatter(const Board& board, const std::vector<DetectedCorner>& corners);
 
 // The standard deviation of an 8-bit image's white noise (grey levels), robust to edges
 // (Immerkaer's mask with a median).

@@ -11,7 +11,7 @@ class Emitter;
 
 namespace ctcal {
 
-enum class TargetType { kAprilGrid, kCheckerboard };
+enum class TargetType { kAprilGrid, kCheckerboard, kCharuco };
 
 struct TargetConfig {
   TargetType type = TargetType::kAprilGrid;
@@ -26,7 +26,18 @@ struct TargetConfig {
   int target_rows = 0;
   double row_spacing_m = 0.0;
   double col_spacing_m = 0.0;
+  // charuco (OpenCV's CharucoBoard; not in Kalibr, names as OpenCV's, docs/targets.md): squares
+  // along x and y, their edge and the ArUco marker's edge (m), OpenCV's predefined dictionary.
+  int squares_x = 0;
+  int squares_y = 0;
+  double square_length_m = 0.0;
+  double marker_length_m = 0.0;
+  std::string dictionary = "DICT_4X4_50";
 };
+
+// OpenCV's predefined ArUco dictionary for `name` (DICT_4X4_50 ... DICT_APRILTAG_36h11, as in
+// cv::aruco::PREDEFINED_DICTIONARY_NAME); -1 if there is none of that name.
+int ArucoDictionaryId(const std::string& name);
 
 // Parses a target node; throws std::runtime_error naming `context` (file or rig key) and the
 // offending key for unknown keys, missing required keys and out-of-range values.

@@ -1,0 +1,329 @@
+// The initial fit of the trajectory spline T_W_B(t) (and of gravity) to the base poses from the
+// camera views and to the base IMU's samples, by Gauss-Newton on normal equations the fit
+// assembles itself: no Ceres residual block per sample, so memory is O(knots) (a band of 6x6
+// blocks) however long the recording (docs/performance.md, step 5). Private to the calibrator.
+//
+// Unknowns: the knots' tangent perturbations (6 per knot, the spline's own right manifolds) and
+// gravity g_W (3, free; the calibration puts it on its sphere afterwards). Whitened residuals,
+// each a model of the calibrator's own residual with the sensor's intrinsics and biases fixed at
+// their guesses:
+//   pose (camera view mapped to B):  Log(R_meas^T R_W_B(t)) / sigma_R,  (p_W_B(t) - p_meas) /
+//   sigma_p; base gyroscope:                  (w_B(t) - w_I) / sigma_w; base accelerometer:
+//   (R_W_B(t)^T (a_W(t) - g_W) - a_I) / sigma_a,
+// with w_I, a_I the sample corrected by the guessed intrinsics and seeded biases (the base IMU
+// defines B, so w_B = w_I and the specific force f_B = a_I). Jacobians: the spline's analytic
+// tangent Jacobians J_R, J_p, J_w, J_f (se3_spline.h); the rotation error's J_r^-1(e) J_R; the
+// specific force's -R_W_B^T with respect to g_W.
+//
+// Structure: a residual of segment s touches knots s .. s+N-1, so H is block-banded (N 6x6 blocks
+// per block row) plus 3 gravity columns; it is assembled band-wise and factored by a sparse LDL^T
+// in natural order (no fill beyond the band and the border). Each step is damped
+// Levenberg-Marquardt style (lambda scales diag(H), grows on a rejected step), which also keeps
+// knots without data determined.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <vector>
+
+#include "ctcal/calibrator/residuals/residual_support.h"
+#include "ctcal/calibrator/spline_init.h"
+#include "ctcal/spline/se3_spline.h"
+#include "ctcal/spline/so3.h"
+#include "ctcal/spline/so3_manifold.h"
+
+namespace ctcal {
+namespace spline_internal {
+
+// One base-IMU sample corrected by the guessed intrinsics and biases (base clock = its clock).
+struct BaseRateSample {
+  std::int64_t t_ns = 0;
+  Eigen::Vector3d w_I = Eigen::Vector3d::Zero();
+  Eigen::Vector3d a_I = Eigen::Vector3d::Zero();
+};
+
+struct TrajectoryFitOptions {
+  double sigma_rotation = 0.01;  // rad: camera-view orientation (extrinsic and offset guesses)
+  double sigma_position = 0.01;  // m
+  double sigma_gyro = 0.05;      // rad/s: guessed gyro intrinsics and bias
+  double sigma_accel = 0.2;      // m/s^2: guessed accelerometer intrinsics and bias
+  bool use_accel = true;         // false: gravity is not estimated (no accelerometer residuals)
+  int max_iterations = 20;
+  double relative_tolerance = 1e-6;  // stop at this relative cost decrease
+};
+
+struct TrajectoryFitReport {
+  int iterations = 0;
+  double initial_cost = 0.0;  // 1/2 sum of squared whitened residuals
+  double final_cost = 0.0;
+};
+
+template <int N, Se3Representation Rep>
+class TrajectoryFit {
+ public:
+  using Spline = Se3Spline<N, Rep>;
+  static constexpr int kGravity = 3;
+
+  TrajectoryFit(const std::vector<TimedPose>& poses, const std::vector<BaseRateSample>& imu,
+                const TrajectoryFitOptions& options)
+      : poses_(poses), imu_(imu), o_(options) {}
+
+  // The start: every knot at the pose nearest to its centre time (poses sorted by time).
+  static void SeedKnots(const std::vector<TimedPose>& poses, Spline* spline) {
+    std::size_t j = 0;
+    for (int k = 0; k < spline->NumKnots() && !poses.empty(); ++k) {
+      const std::int64_t tc = spline->KnotCentreTimeNs(k);
+      while (j + 1 < poses.size() &&
+             std::llabs(poses[j + 1].t_ns - tc) <= std::llabs(poses[j].t_ns - tc))
+        ++j;
+      spline->KnotRotation(k) = poses[j].q_W_B.normalized();
+      spline->KnotPosition(k) = poses[j].p_W_B;
+    }
+  }
+
+  // Refines `spline` (its knots are the start) and `g_W` in place.
+  TrajectoryFitReport Run(Spline* spline, Eigen::Vector3d* g_W) {
+    spline_ = spline;
+    g_ = *g_W;
+    K_ = spline->NumKnots();
+    n_ = 6 * K_ + (o_.use_accel ? kGravity : 0);
+    TrajectoryFitReport report;
+    double cost = Assemble(true);
+    report.initial_cost = cost;
+    double lambda = 1e-6;
+    std::vector<double> saved(static_cast<std::size_t>(7 * K_));
+    for (int it = 0; it < o_.max_iterations; ++it) {
+      Eigen::VectorXd dx;
+      if (!SolveStep(lambda, &dx))
+        break;
+      std::copy(spline->KnotData(0), spline->KnotData(0) + 7 * K_, saved.begin());
+      const Eigen::Vector3d g_saved = g_;
+      ApplyStep(dx);
+      const double new_cost = Assemble(false);
+      if (!(new_cost < cost)) {  // rejected (also NaN): undo, damp more
+        std::copy(saved.begin(), saved.end(), spline->KnotData(0));
+        g_ = g_saved;
+        lambda *= 10.0;
+        if (lambda > 1e6)
+          break;
+        continue;
+      }
+      ++report.iterations;
+      const double change = (cost - new_cost) / std::max(cost, 1e-300);
+      cost = Assemble(true);
+      lambda = std::max(lambda / 10.0, 1e-9);
+      if (change < o_.relative_tolerance)
+        break;
+    }
+    report.final_cost = cost;
+    *g_W = g_;
+    return report;
+  }
+
+ private:
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Block = typename Spline::template Jacobians<double>::Block;
+
+  int SegmentOf(std::int64_t t_ns) const {
+    const KnotTiming& tm = spline_->timing();
+    const std::int64_t k = (t_ns - tm.t0_ns) / tm.dt_ns;
+    return static_cast<int>(
+        std::min<std::int64_t>(std::max<std::int64_t>(k, 0), spline_->NumSegments() - 1));
+  }
+
+  // Knot i's 6 tangent columns of a segment Jacobian (layout of se3_spline.h: split = rotations
+  // of the N knots, then their positions; joint = 6 per knot).
+  template <int Rows>
+  static Eigen::Matrix<double, Rows, 6> KnotColumns(const Eigen::Matrix<double, Rows, 6 * N>& J,
+                                                    int i) {
+    Eigen::Matrix<double, Rows, 6> out;
+    if constexpr (Rep == Se3Representation::kJoint) {
+      out = J.template middleCols<6>(6 * i);
+    } else {
+      out.template leftCols<3>() = J.template middleCols<3>(3 * i);
+      out.template rightCols<3>() = J.template middleCols<3>(3 * (N + i));
+    }
+    return out;
+  }
+
+  // Adds one whitened residual r (Rows) with Jacobian J over the segment's knots and J_g over
+  // gravity (nullptr: none) to H and b; returns 1/2 |r|^2.
+  template <int Rows>
+  double Add(int seg, const Eigen::Matrix<double, Rows, 1>& r,
+             const Eigen::Matrix<double, Rows, 6 * N>& J, const Eigen::Matrix<double, Rows, 3>* J_g,
+             bool jacobians) {
+    if (jacobians) {
+      std::array<Eigen::Matrix<double, Rows, 6>, N> Jk;
+      for (int i = 0; i < N; ++i)
+        Jk[static_cast<std::size_t>(i)] = KnotColumns<Rows>(J, i);
+      for (int i = 0; i < N; ++i) {
+        const auto& Ji = Jk[static_cast<std::size_t>(i)];
+        b_.template segment<6>(6 * (seg + i)) -= Ji.transpose() * r;
+        for (int j = i; j < N; ++j)
+          Band(seg + i, j - i).noalias() += Ji.transpose() * Jk[static_cast<std::size_t>(j)];
+        if (J_g != nullptr)
+          border_.template middleRows<6>(6 * (seg + i)).noalias() += Ji.transpose() * *J_g;
+      }
+      if (J_g != nullptr) {
+        Hgg_.noalias() += J_g->transpose() * *J_g;
+        b_.template tail<3>() -= J_g->transpose() * r;
+      }
+    }
+    return 0.5 * r.squaredNorm();
+  }
+
+  Mat6& Band(int k, int j) { return band_[static_cast<std::size_t>(N * k + j)]; }
+
+  // The cost at the current values; with `jacobians`, also H and b (-gradient).
+  double Assemble(bool jacobians) {
+    if (jacobians) {
+      band_.assign(static_cast<std::size_t>(N * K_), Mat6::Zero());
+      border_.setZero(6 * K_, 3);
+      Hgg_.setZero();
+      b_.setZero(n_);
+    }
+    double cost = 0.0;
+    const double wR = 1.0 / o_.sigma_rotation, wp = 1.0 / o_.sigma_position;
+    for (const TimedPose& pose : poses_) {
+      if (pose.t_ns < spline_->MinTimeNs() || pose.t_ns > spline_->MaxTimeNs())
+        continue;
+      Se3Kinematics<double> kin;
+      Block J_R, J_p;
+      typename Spline::template Jacobians<double> Jk;
+      Jk.J_R_knots = &J_R;
+      Jk.J_p_knots = &J_p;
+      Evaluate(pose.t_ns, 0, nullptr, &kin, jacobians ? &Jk : nullptr);
+      const Eigen::Vector3d e = LogSO3<double>(
+          Eigen::Quaterniond(pose.q_W_B.conjugate() * Eigen::Quaterniond(kin.R_W_B)));
+      Eigen::Matrix<double, 6, 1> r;
+      r << wR * e, wp * (kin.p_W_B - pose.p_W_B);
+      Eigen::Matrix<double, 6, 6 * N> J;
+      if (jacobians) {
+        J.template topRows<3>() = wR * RightJacobianInvSO3<double>(e) * J_R;
+        J.template bottomRows<3>() = wp * J_p;
+      }
+      cost += Add<6>(seg_, r, J, nullptr, jacobians);
+    }
+    const double ww = 1.0 / o_.sigma_gyro, wa = 1.0 / o_.sigma_accel;
+    for (const BaseRateSample& z : imu_) {
+      if (z.t_ns < spline_->MinTimeNs() || z.t_ns > spline_->MaxTimeNs())
+        continue;
+      Se3Kinematics<double> kin;
+      Block J_w, J_f;
+      typename Spline::template Jacobians<double> Jk;
+      Jk.J_w_knots = &J_w;
+      if (o_.use_accel)
+        Jk.J_f_knots = &J_f;
+      Evaluate(z.t_ns, o_.use_accel ? 2 : 1, &g_, &kin, jacobians ? &Jk : nullptr);
+      if (!o_.use_accel) {
+        const Eigen::Vector3d r = ww * (kin.w_B - z.w_I);
+        cost += Add<3>(seg_, r, Eigen::Matrix<double, 3, 6 * N>(ww * J_w), nullptr, jacobians);
+        continue;
+      }
+      Eigen::Matrix<double, 6, 1> r;
+      r << ww * (kin.w_B - z.w_I), wa * (kin.SpecificForce(g_) - z.a_I);
+      Eigen::Matrix<double, 6, 6 * N> J;
+      Eigen::Matrix<double, 6, 3> J_g = Eigen::Matrix<double, 6, 3>::Zero();
+      if (jacobians) {
+        J.template topRows<3>() = ww * J_w;
+        J.template bottomRows<3>() = wa * J_f;
+        J_g.template bottomRows<3>() = -wa * kin.R_W_B.transpose();
+      }
+      cost += Add<6>(seg_, r, J, &J_g, jacobians);
+    }
+    return cost;
+  }
+
+  void Evaluate(std::int64_t t_ns, int derivatives, const Eigen::Vector3d* g_W,
+                Se3Kinematics<double>* kin, const typename Spline::template Jacobians<double>* J) {
+    seg_ = SegmentOf(t_ns);
+    const SegmentClock clock = SegmentClock::At(t_ns, spline_->timing(), seg_);
+    Spline::template EvaluateSegment<double>(spline_->SegmentBlocks(seg_).data(), clock.U(),
+                                             clock.inv_dt, derivatives, g_W, kin, J);
+  }
+
+  // Solves (H + lambda diag(H) + eps I) dx = b.
+  bool SolveStep(double lambda, Eigen::VectorXd* dx) {
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(static_cast<std::size_t>(K_) * (36 * N + 18) + 9);
+    double max_diag = 0.0;
+    for (int k = 0; k < K_; ++k)
+      max_diag = std::max(max_diag, Band(k, 0).diagonal().maxCoeff());
+    const double eps = 1e-12 * std::max(max_diag, 1.0);
+    const auto diag = [&](double d) { return d + lambda * d + eps; };
+    for (int k = 0; k < K_; ++k) {
+      for (int j = 0; j < N && k + j < K_; ++j) {
+        const Mat6& B = Band(k, j);
+        for (int a = 0; a < 6; ++a) {
+          for (int c = 0; c < 6; ++c) {
+            const int row = 6 * k + a, col = 6 * (k + j) + c;
+            if (row > col)
+              continue;
+            t.emplace_back(row, col, row == col ? diag(B(a, c)) : B(a, c));
+          }
+        }
+      }
+    }
+    if (o_.use_accel) {
+      for (int row = 0; row < 6 * K_; ++row) {
+        for (int c = 0; c < 3; ++c)
+          t.emplace_back(row, 6 * K_ + c, border_(row, c));
+      }
+      for (int a = 0; a < 3; ++a) {
+        for (int c = a; c < 3; ++c)
+          t.emplace_back(6 * K_ + a, 6 * K_ + c, a == c ? diag(Hgg_(a, c)) : Hgg_(a, c));
+      }
+    }
+    Eigen::SparseMatrix<double> H(n_, n_);
+    H.setFromTriplets(t.begin(), t.end());
+    t.clear();
+    t.shrink_to_fit();
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
+        ldlt(H);
+    if (ldlt.info() != Eigen::Success)
+      return false;
+    *dx = ldlt.solve(b_);
+    return ldlt.info() == Eigen::Success && dx->allFinite();
+  }
+
+  void ApplyStep(const Eigen::VectorXd& dx) {
+    for (int k = 0; k < K_; ++k) {
+      double* x = spline_->KnotData(k);
+      const double* d = dx.data() + 6 * k;
+      double out[7];
+      if constexpr (Rep == Se3Representation::kJoint) {
+        se3_.Plus(x, d, out);
+        std::copy(out, out + 7, x);
+      } else {
+        so3_.Plus(x, d, out);
+        std::copy(out, out + 4, x);
+        for (int i = 0; i < 3; ++i)
+          x[4 + i] += d[3 + i];
+      }
+    }
+    if (o_.use_accel)
+      g_ += dx.template tail<3>();
+  }
+
+  const std::vector<TimedPose>& poses_;
+  const std::vector<BaseRateSample>& imu_;
+  TrajectoryFitOptions o_;
+  Spline* spline_ = nullptr;
+  Eigen::Vector3d g_ = Eigen::Vector3d::Zero();
+  int K_ = 0;
+  int n_ = 0;
+  int seg_ = 0;
+  std::vector<Mat6, Eigen::aligned_allocator<Mat6>> band_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> border_;
+  Eigen::Matrix3d Hgg_ = Eigen::Matrix3d::Zero();
+  Eigen::VectorXd b_;
+  So3RightManifold so3_;
+  Se3RightManifold se3_;
+};
+
+}  // namespace spline_internal
+}  // namespace ctcal
