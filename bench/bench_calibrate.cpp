@@ -1,8 +1,9 @@
 // End-to-end speed of `ctcal calibrate --method spline` (CalibrateSpline, covariance included) on
 // the default rig: compressed per-frame camera blocks vs one block per corner, analytic vs
-// autodiff Jacobians, 1 vs 2 threads. Counters: LM iterations, seconds per iteration (wall),
-// covariance seconds, total seconds; the benchmark's own time is wall time (UseRealTime) and
-// process CPU time over all threads (MeasureProcessCPUTime).
+// autodiff Jacobians, 1 vs 2 threads; and of `--method discrete` against it (BM_Methods). Counters:
+// LM iterations, seconds per iteration (wall), covariance seconds, total seconds; the benchmark's
+// own time is wall time (UseRealTime) and process CPU time over all threads
+// (MeasureProcessCPUTime).
 //
 // Data: CTCAL_BENCH_DATA=<folder written by `ctcal simulate`> (e.g. the demo's 60 s rig), else
 // a `full` scenario of CTCAL_BENCH_DURATION seconds (default 20, seed 2024, table4 guesses) is
@@ -17,6 +18,7 @@
 #include <memory>
 #include <string>
 
+#include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -91,6 +93,51 @@ BENCHMARK(BM_Calibrate)
     ->Args({2, 0, 1})
     ->Args({1, 0, 1})
     ->Args({2, 0, 0})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+// The discrete method (CalibrateDiscrete, covariance included) against the spline method on the
+// same data, with the inertial sensors' intrinsics estimated as the rig file says (the base IMU's
+// factor then re-integrates its samples at every evaluation, eq. 37) or fixed at the rig file's
+// values (`estimate:` without intrinsics on every imu and gyro: bias-linearised factor, eq. 36).
+// args: method (0 spline, 1 discrete), imu_intrinsics (0/1), threads.
+void BM_Methods(benchmark::State& state) {
+  const BenchData& d = Data();
+  RigConfig rig = d.rig;
+  if (state.range(1) == 0) {
+    for (SensorConfig& s : rig.sensors) {
+      if (s.type != SensorType::kCamera)
+        s.estimate.erase(EstimateItem::kIntrinsics);
+    }
+  }
+  const int threads = static_cast<int>(state.range(2));
+  SplineCalibrationResult result;
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      SplineCalibratorOptions options;
+      options.threads = threads;
+      result = CalibrateSpline(rig, d.data, options, [](const std::string&) {});
+    } else {
+      DiscreteCalibratorOptions options;
+      options.threads = threads;
+      result = CalibrateDiscrete(rig, d.data, options, [](const std::string&) {});
+    }
+    benchmark::DoNotOptimize(result.result.solver);
+  }
+  state.counters["iterations"] = result.iterations;
+  state.counters["s_per_iteration"] = result.seconds_per_iteration;
+  state.counters["solve_s"] = result.solve_seconds;
+  state.counters["covariance_s"] = result.covariance_seconds;
+  state.counters["total_s"] = result.total_seconds;
+}
+BENCHMARK(BM_Methods)
+    ->ArgNames({"discrete", "imu_intrinsics", "threads"})
+    ->Args({0, 1, 2})
+    ->Args({1, 1, 2})
+    ->Args({0, 0, 2})
+    ->Args({1, 0, 2})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "ctcal/calibrator/discrete/discrete_residuals.h"
+#include "ctcal/calibrator/discrete/frame_corners.h"
 #include "ctcal/calibrator/observability/motion_prediction.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "spline_problem_impl.h"
@@ -128,8 +129,7 @@ class DiscreteProblem {
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_ = std::make_unique<ceres::Problem>(po);
-    corner_ids_.clear();
-    corner_index_.clear();
+    corner_slots_.clear();
     inertial_ids_.clear();
     slots_.clear();
     ceres::Problem& P = *problem_;
@@ -209,13 +209,12 @@ class DiscreteProblem {
       o.camera = cam.state->name();
       o.views = static_cast<int>(cam.views.size());
       o.invalid = cam.invalid;
-      const auto& ids = corner_ids_[c].second;
-      o.corners = static_cast<int>(ids.size());
-      for (std::size_t i = 0; i < ids.size(); ++i) {
-        double r[2];
-        const bool ok = problem_->EvaluateResidualBlock(ids[i], false, nullptr, r, nullptr);
-        if (!ok || r[0] * r[0] + r[1] * r[1] > gate) {
-          cam.removed[corner_index_[c][i]] = true;
+      const auto& in_problem = corner_slots_[c];
+      o.corners = static_cast<int>(in_problem.size());
+      for (const auto& [i, slot] : in_problem) {
+        Eigen::Vector2d e;
+        if (!EvaluateCorner(cam, i, slot, &e) || e.squaredNorm() > gate) {
+          cam.removed[i] = true;
           ++o.removed;
         }
       }
@@ -246,20 +245,19 @@ class DiscreteProblem {
   }
 
   void Finish(SplineCalibrationResult* out) {
-    // Corner statistics: FinishResult's (2-residual blocks); the preintegration factors' below.
-    // Every corner is its own 2-residual block here: evaluate them one by one.
+    // Corner statistics: FinishResult's, from every corner evaluated on its own (also where the
+    // problem holds frame blocks); the preintegration factors' below.
     std::vector<spline_internal::CornerResiduals> corners;
     for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
       const PreparedCamera& cam = prep_.cameras[c];
       spline_internal::CornerResiduals rc;
       rc.camera = cam.state->name();
-      const auto& ids = corner_ids_[c].second;
-      for (std::size_t i = 0; i < ids.size(); ++i) {
+      for (const auto& [i, slot] : corner_slots_[c]) {
         Eigen::Vector2d e;
-        if (!problem_->EvaluateResidualBlock(ids[i], false, nullptr, e.data(), nullptr))
+        if (!EvaluateCorner(cam, i, slot, &e))
           continue;
         rc.whitened.push_back(e);
-        rc.sigma_px.push_back(cam.corners[corner_index_[c][i]].sigma_px);
+        rc.sigma_px.push_back(cam.corners[i].sigma_px);
       }
       corners.push_back(std::move(rc));
     }
@@ -385,6 +383,12 @@ class DiscreteProblem {
     for (std::size_t k = 0; k < times.size(); ++k) {
       kf_[k].t = times[k];
       kf_[k].raw = RawAt(base_samples_, times[k]);
+      // d/dt of the raw readings' cubic (central difference: exact to O(eps^2) on a cubic).
+      const double eps = 1e-4;
+      const RawImuSample after = RawAt(base_samples_, times[k] + eps);
+      const RawImuSample before = RawAt(base_samples_, times[k] - eps);
+      kf_[k].raw_rate.w_m = (after.w_m - before.w_m) / (2.0 * eps);
+      kf_[k].raw_rate.a_m = (after.a_m - before.a_m) / (2.0 * eps);
     }
     log_(Fmt("  %.0f keyframes over %.3f s (mean spacing %.4f s)", static_cast<double>(kf_.size()),
              times.back() - times.front(),
@@ -435,7 +439,7 @@ class DiscreteProblem {
           if (p != nullptr)
             blocks.push_back(p);
         }
-        cost = discrete::ReintegrationFactor::Create(pre, intr);
+        cost = discrete::ReintegrationFactor::CreateSplit(pre, intr);
       } else {
         cost = discrete::PreintegrationFactor::Create(pre);
       }
@@ -492,7 +496,7 @@ class DiscreteProblem {
         auto pre = std::make_shared<Preintegration>(a->samples, tau_i, tau_j, *s.imu, noise,
                                                     Eigen::Vector3d(a->bg[k].data()),
                                                     Eigen::Vector3d(a->ba[k].data()));
-        cost = MakeDynamicAutoDiff(new AuxImuFunctor{pre, src_i, src_j, ix}, list.sizes(), 9);
+        cost = discrete::MakeSplitIntegration(AuxImuFunctor{pre, src_i, src_j, ix}, list, 9);
       } else {
         AuxGyroIndex ix;
         ix.model = s.gyro->model();
@@ -503,7 +507,7 @@ class DiscreteProblem {
         ix.bg = list.Add(a->bg[k].data(), 3);
         auto pre = std::make_shared<GyroPreintegration>(a->samples, tau_i, tau_j, *s.gyro, noise,
                                                         Eigen::Vector3d(a->bg[k].data()));
-        cost = MakeDynamicAutoDiff(new AuxGyroFunctor{pre, src_i, src_j, ix}, list.sizes(), 3);
+        cost = discrete::MakeSplitIntegration(AuxGyroFunctor{pre, src_i, src_j, ix}, list, 3);
       }
       ids.push_back(problem_->AddResidualBlock(cost, nullptr, list.blocks()));
       const double dt = tau_j - tau_i;
@@ -543,11 +547,49 @@ class DiscreteProblem {
     return slot;
   }
 
+  // The per-corner residual's blocks for a corner of `cam` read through `slot`.
+  ceres::CostFunction* CornerCost(PreparedCamera* cam, std::size_t i, const CornerSlot& slot,
+                                  BlockList* list) {
+    SensorState& s = *cam->state;
+    const std::size_t k = static_cast<std::size_t>(slot.k);
+    const BaseSource src = BaseSource::Add(list, &kf_[k], slot.kinematic ? nullptr : &kf_[k + 1],
+                                           &*state_.base().imu, state_.g_W());
+    CornerIndex c;
+    c.q_B_C = list->Add(s.q_B_S.data(), 4);
+    c.t_B_C = list->Add(s.t_B_S.data(), 3);
+    c.time_offset = list->Add(&s.time_offset, 1);
+    c.line_delay = list->Add(&s.line_delay, 1);
+    c.params = list->Add(s.camera->mutable_params(), s.camera->NumParams());
+    return discrete::MakeDiscreteCorner(s.camera->type(), cam->corners[i], Stamp(*cam, i), src, c,
+                                        *list);
+  }
+
+  double Stamp(const PreparedCamera& cam, std::size_t i) const {
+    return 1e-9 * static_cast<double>(cam.stamps[i] - prep_.t0_ns);
+  }
+
+  // The corner's whitened residual at the current values, evaluated on its own (the statistics
+  // and the outlier gate need it per corner, also where the problem holds frame blocks).
+  bool EvaluateCorner(const PreparedCamera& cam, std::size_t i, const CornerSlot& slot,
+                      Eigen::Vector2d* e) {
+    BlockList list;
+    const std::unique_ptr<ceres::CostFunction> cost(
+        CornerCost(const_cast<PreparedCamera*>(&cam), i, slot, &list));
+    return cost->Evaluate(list.blocks().data(), e->data(), nullptr) && e->allFinite();
+  }
+
+  // Whether the camera's corners enter as compressed per-frame blocks (frame_corners.h): a
+  // global-shutter camera (line_delay 0 and not estimated), whose corners of one frame share the
+  // pose; rolling shutter reads every corner at its own row time and keeps one block per corner.
+  bool Compressed(const PreparedCamera& cam) const {
+    const SensorState& s = *cam.state;
+    return options_.compress_frames && !s.config.Estimates(EstimateItem::kLineDelay) &&
+           s.line_delay == 0.0;
+  }
+
   void AddCamera(PreparedCamera* cam, bool robust) {
     SensorState& s = *cam->state;
-    SensorState& base = state_.base();
-    std::vector<ceres::ResidualBlockId> ids;
-    std::vector<std::size_t> index;
+    std::vector<std::pair<std::size_t, CornerSlot>> in_problem;
     for (double* p : {s.q_B_S.data(), s.t_B_S.data(), &s.time_offset, &s.line_delay,
                       s.camera->mutable_params()})
       calib_ptrs_.insert(p);
@@ -556,27 +598,55 @@ class DiscreteProblem {
         continue;
       const CornerSlot slot = SlotOf(CornerTime(*cam, i));
       slots_.push_back(slot);
-      if (slot.k < 0)
-        continue;
+      if (slot.k >= 0)
+        in_problem.emplace_back(i, slot);
+    }
+    if (Compressed(*cam)) {
+      AddCameraFrames(cam, in_problem, robust);
+    } else {
+      for (const auto& [i, slot] : in_problem) {
+        BlockList list;
+        ceres::CostFunction* cost = CornerCost(cam, i, slot, &list);
+        ceres::LossFunction* loss =
+            robust ? new ceres::HuberLoss(options_.huber_threshold) : nullptr;
+        problem_->AddResidualBlock(cost, loss, list.blocks());
+      }
+    }
+    corner_slots_.push_back(std::move(in_problem));
+  }
+
+  // One compressed block per frame (frame_corners.h): runs of `in_problem` with one stamp, which
+  // share the slot (global shutter: one exposure time); the robust stage's Huber weights are
+  // applied per corner inside the block.
+  void AddCameraFrames(PreparedCamera* cam,
+                       const std::vector<std::pair<std::size_t, CornerSlot>>& in_problem,
+                       bool robust) {
+    SensorState& s = *cam->state;
+    std::size_t first = 0;
+    while (first < in_problem.size()) {
+      const std::size_t i0 = in_problem[first].first;
+      const CornerSlot slot = in_problem[first].second;
+      std::size_t last = first + 1;
+      while (last < in_problem.size() && cam->stamps[in_problem[last].first] == cam->stamps[i0])
+        ++last;
+      std::vector<CornerMeasurement> corners;
+      for (std::size_t j = first; j < last; ++j)
+        corners.push_back(cam->corners[in_problem[j].first]);
       BlockList list;
       const std::size_t k = static_cast<std::size_t>(slot.k);
       const BaseSource src = BaseSource::Add(&list, &kf_[k], slot.kinematic ? nullptr : &kf_[k + 1],
-                                             &*base.imu, state_.g_W());
-      CornerIndex c;
+                                             &*state_.base().imu, state_.g_W());
+      discrete::FramePoseIndex c;
       c.q_B_C = list.Add(s.q_B_S.data(), 4);
       c.t_B_C = list.Add(s.t_B_S.data(), 3);
       c.time_offset = list.Add(&s.time_offset, 1);
-      c.line_delay = list.Add(&s.line_delay, 1);
-      c.params = list.Add(s.camera->mutable_params(), s.camera->NumParams());
-      const double stamp = 1e-9 * static_cast<double>(cam->stamps[i] - prep_.t0_ns);
-      ceres::CostFunction* cost =
-          discrete::MakeDiscreteCorner(s.camera->type(), cam->corners[i], stamp, src, c, list);
-      ceres::LossFunction* loss = robust ? new ceres::HuberLoss(options_.huber_threshold) : nullptr;
-      ids.push_back(problem_->AddResidualBlock(cost, loss, list.blocks()));
-      index.push_back(i);
+      list.Add(s.camera->mutable_params(), s.camera->NumParams());
+      problem_->AddResidualBlock(
+          discrete::MakeDiscreteFrameCorners(s.camera->type(), std::move(corners), Stamp(*cam, i0),
+                                             src, c, list, robust ? options_.huber_threshold : 0.0),
+          nullptr, list.blocks());
+      first = last;
     }
-    corner_ids_.emplace_back(s.name(), std::move(ids));
-    corner_index_.push_back(std::move(index));
   }
 
   Prepared& prep_;
@@ -591,8 +661,8 @@ class DiscreteProblem {
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
   std::set<double*> calib_ptrs_;
-  std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> corner_ids_;
-  std::vector<std::vector<std::size_t>> corner_index_;
+  // Per camera, the corners in the problem and the keyframe(s) each reads.
+  std::vector<std::vector<std::pair<std::size_t, CornerSlot>>> corner_slots_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<CornerSlot> slots_;

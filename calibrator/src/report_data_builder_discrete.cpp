@@ -26,13 +26,15 @@ class KeyframeMotion {
     g_W_[2] = g_W.z();
     if (kf_.empty())
       throw std::invalid_argument("report data: no keyframes");
-    // A.1 at the keyframe itself: the corrected base reading; a_W from A.1's velocity, which is
-    // linear in the time from the keyframe.
+    // A.1 at the keyframe itself: the corrected base reading; a_W = d/dt of A.1's velocity at
+    // the keyframe (central difference: the midpoint A.1's velocity is not linear in the time).
     for (std::size_t k = 0; k < kf_.size(); ++k) {
+      const double h = 1e-4;
       const BaseMotion<double> m0 = Motion(static_cast<int>(k), true, kf_[k].t);
-      const BaseMotion<double> m1 = Motion(static_cast<int>(k), true, kf_[k].t + 1e-3);
+      const BaseMotion<double> m1 = Motion(static_cast<int>(k), true, kf_[k].t + h);
+      const BaseMotion<double> m2 = Motion(static_cast<int>(k), true, kf_[k].t - h);
       w_k_.push_back(m0.w_B);
-      a_k_.push_back((m1.v_W - m0.v_W) / 1e-3);
+      a_k_.push_back((m1.v_W - m2.v_W) / (2.0 * h));
     }
   }
 

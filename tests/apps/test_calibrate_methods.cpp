@@ -75,7 +75,8 @@ TEST(CalibrateMethods, BothWritesTwoHonestResultsAndTheCrossCheck) {
   const double rms = std::sqrt(sum_sq / finite);
   std::printf("discrete vs truth: %d / %d within 3 sigma, RMS error/sigma %.3f\n", within3, finite,
               rms);
-  EXPECT_GE(within3, static_cast<int>(0.95 * finite));
+  // The issue's bar (>= 97 %); 94 / 95 measured (RMS 1.07) with the midpoint A.1.
+  EXPECT_GE(within3, static_cast<int>(std::ceil(0.97 * finite)));
   EXPECT_GT(rms, 0.6);
   EXPECT_LT(rms, 1.5);
   // Corners: whitened RMS ~1. The preintegration factors' is below 1 by design (each keyframe's
@@ -110,7 +111,9 @@ TEST(CalibrateMethods, BothWritesTwoHonestResultsAndTheCrossCheck) {
   EXPECT_EQ(static_cast<int>(x["flagged"].size()), flagged);
   std::printf("cross-check: %d of %zu flagged\n", flagged,
               static_cast<std::size_t>(x["rows"].size()));
-  EXPECT_LE(flagged, 6);
+  // "At most a couple" (issue 8): 0 measured since the midpoint A.1 (3 before, from the
+  // constant-reading A.1's bias at the shifted time offsets; docs/discrete.md).
+  EXPECT_LE(flagged, 2);
 }
 
 TEST(CalibrateMethods, BadMethodOrAuxVelocityIsAUsageError) {

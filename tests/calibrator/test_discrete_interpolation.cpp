@@ -84,6 +84,43 @@ TEST(DiscreteInterpolation, KinematicErrorOrdersNearAKeyframe) {
   }
 }
 
+Errors MidpointError(const sim::Trajectory& traj, double s) {
+  Errors e;
+  for (int n = 0; n < 30; ++n) {
+    const double t_k = 2.0 + 0.173 * n;
+    const sim::KinematicState a = traj.Evaluate(t_k), mid = traj.Evaluate(t_k + 0.5 * s),
+                              x = traj.Evaluate(t_k + s);
+    const Eigen::Vector3d a_mid = mid.q_W_B.conjugate() * (mid.a_W - kGravityW);
+    Eigen::Vector3d v;
+    const auto pose = PropagateMidpoint<double>(a.q_W_B, a.p_W_B, a.v_W, mid.w_B, a_mid, kGravityW,
+                                                t_k, t_k + s, &v);
+    e.rot = std::max(e.rot, RotationError<double>(pose.q_W_B, x.q_W_B).norm());
+    e.pos = std::max(e.pos, (pose.p_W_B - x.p_W_B).norm());
+  }
+  return e;
+}
+
+// The midpoint A.1 (the discrete problem's): rotation error third order in the distance to the
+// keyframe, and far below the constant-reading A.1 at the time-offset shifts of table4 guesses.
+TEST(DiscreteInterpolation, MidpointKinematicErrorIsThirdOrder) {
+  const auto traj = sim::MakeTrajectory(sim::Scenario::kFull, sim::Scene{});
+  Errors prev;
+  for (double s : {0.02, 0.01, 0.005}) {
+    const Errors e = MidpointError(*traj, s);
+    const Errors constant = KinematicError(*traj, s);
+    std::printf(
+        "A.1 midpoint at %.3f s: rotation %.2e rad (constant reading %.2e), position %.2e m\n", s,
+        e.rot, constant.rot, e.pos);
+    EXPECT_LT(e.rot, 0.1 * constant.rot);
+    EXPECT_LT(e.pos, constant.pos);
+    if (prev.rot > 0) {
+      EXPECT_NEAR(prev.rot / e.rot, 8.0, 2.5);
+      EXPECT_NEAR(prev.pos / e.pos, 8.0, 2.5);
+    }
+    prev = e;
+  }
+}
+
 // The Jet derivative with respect to the query time (time offsets) matches central differences.
 TEST(DiscreteInterpolation, TimeDerivativeMatchesNumeric) {
   using J = ceres::Jet<double, 1>;

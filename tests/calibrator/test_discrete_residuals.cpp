@@ -92,6 +92,46 @@ void ExpectJacobiansMatchNumeric(const ceres::CostFunction& cost, const BlockLis
   }
 }
 
+// The two-pass Jacobians of SplitIntegrationCost against the one-pass Jet Jacobians of the same
+// functor, every block wanted, and with only the state blocks wanted (the integration pass
+// skipped).
+void ExpectSplitMatchesOnePass(const ceres::CostFunction& split, const ceres::CostFunction& ref,
+                               const std::vector<double*>& x,
+                               const std::vector<bool>& integration) {
+  const int nr = ref.num_residuals();
+  ASSERT_EQ(split.num_residuals(), nr);
+  ASSERT_EQ(split.parameter_block_sizes(), ref.parameter_block_sizes());
+  const std::size_t nb = x.size();
+  for (const bool states_only : {false, true}) {
+    std::vector<std::vector<double>> ja(nb), jb(nb);
+    std::vector<double*> pa(nb, nullptr), pb(nb, nullptr);
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (states_only && integration[b])
+        continue;
+      const std::size_t size = static_cast<std::size_t>(nr * ref.parameter_block_sizes()[b]);
+      ja[b].assign(size, 0.0);
+      jb[b].assign(size, 0.0);
+      pa[b] = ja[b].data();
+      pb[b] = jb[b].data();
+    }
+    Eigen::VectorXd ra(nr), rb(nr), r0(nr);
+    ASSERT_TRUE(ref.Evaluate(x.data(), ra.data(), pa.data()));
+    ASSERT_TRUE(split.Evaluate(x.data(), rb.data(), pb.data()));
+    ASSERT_TRUE(split.Evaluate(x.data(), r0.data(), nullptr));
+    EXPECT_LT((rb - ra).norm(), 1e-12 * std::max(1.0, ra.norm()));
+    EXPECT_LT((r0 - ra).norm(), 1e-12 * std::max(1.0, ra.norm()));
+    for (std::size_t b = 0; b < nb; ++b) {
+      const Eigen::Map<const Eigen::VectorXd> A(ja[b].data(),
+                                                static_cast<Eigen::Index>(ja[b].size()));
+      const Eigen::Map<const Eigen::VectorXd> B(jb[b].data(),
+                                                static_cast<Eigen::Index>(jb[b].size()));
+      EXPECT_LT((B - A).norm(), 1e-9 * std::max(1.0, A.norm()))
+          << "block " << b << (integration[b] ? " (integration)" : " (state)")
+          << (states_only ? ", states only" : "");
+    }
+  }
+}
+
 // Two keyframes 30 ms apart with random states, a base IMU with every intrinsic block, gravity.
 class DiscreteResiduals : public ::testing::Test {
  protected:
@@ -105,6 +145,10 @@ class DiscreteResiduals : public ::testing::Test {
       Set3(&k->b_a, Rand3(&rng, 0.1));
       k->raw.w_m = Rand3(&rng, 1.0);
       k->raw.a_m = Rand3(&rng, 3.0) + Eigen::Vector3d(0, 0, 9.8);
+    }
+    for (Keyframe* k : {&k0_, &k1_}) {
+      k->raw_rate.w_m = Rand3(&rng, 5.0);
+      k->raw_rate.a_m = Rand3(&rng, 20.0);
     }
     k0_.t = 1.0;
     k1_.t = 1.03;
@@ -227,6 +271,77 @@ TEST_F(DiscreteResiduals, AuxGyroJacobiansMatchNumeric) {
   std::unique_ptr<ceres::CostFunction> cost(
       MakeDynamicAutoDiff(new AuxGyroFunctor{pre, src_i, src_j, ix}, list.sizes(), 3));
   ExpectJacobiansMatchNumeric(*cost, list, Quaternions());
+}
+
+TEST_F(DiscreteResiduals, SplitIntegrationMatchesOnePassJacobians) {
+  for (const bool rigid : {false, true}) {
+    BlockList list;
+    const BaseSource src_i = BaseSource::Add(&list, &k0_, nullptr, &base_, g_W_.data());
+    const BaseSource src_j = BaseSource::Add(&list, &k1_, nullptr, &base_, g_W_.data());
+    AuxImuIndex ix;
+    ix.intr = ImuBlockIndex::Add(&list, &aux_imu_);
+    ix.q_B_A = list.Add(q_B_S_.data(), 4);
+    ix.t_B_A = list.Add(t_B_S_.data(), 3);
+    ix.time_offset = list.Add(&time_offset_, 1);
+    if (!rigid) {
+      ix.v_i = list.Add(v_i_.data(), 3);
+      ix.v_j = list.Add(v_j_.data(), 3);
+    }
+    ix.bg = list.Add(bg_.data(), 3);
+    ix.ba = list.Add(ba_.data(), 3);
+    auto pre = std::make_shared<Preintegration>(
+        aux_samples_, k0_.t - time_offset_, k1_.t - time_offset_, aux_imu_, noise_,
+        Eigen::Vector3d(bg_.data()), Eigen::Vector3d(ba_.data()));
+    const AuxImuFunctor f{pre, src_i, src_j, ix};
+    std::unique_ptr<ceres::CostFunction> ref(
+        MakeDynamicAutoDiff(new AuxImuFunctor(f), list.sizes(), 9));
+    std::unique_ptr<ceres::CostFunction> split(MakeSplitIntegration(f, list, 9));
+    SCOPED_TRACE(rigid ? "aux imu, rigid" : "aux imu, state");
+    ExpectSplitMatchesOnePass(*split, *ref, list.blocks(),
+                              f.IntegrationBlocks(list.sizes().size()));
+  }
+  {
+    BlockList list;
+    const BaseSource src_i = BaseSource::Add(&list, &k0_, nullptr, &base_, g_W_.data());
+    // An A.2 source at the end (the split must not depend on the pose's form).
+    const BaseSource src_j = BaseSource::Add(&list, &k0_, &k1_, &base_, g_W_.data());
+    AuxGyroIndex ix;
+    ix.model = gyro_.model();
+    ix.Dw = list.Add(gyro_.Dw(), gyro_.DwSize());
+    ix.q_B_G = list.Add(q_B_S_.data(), 4);
+    ix.time_offset = list.Add(&time_offset_, 1);
+    ix.bg = list.Add(bg_.data(), 3);
+    auto pre = std::make_shared<GyroPreintegration>(aux_samples_, k0_.t - time_offset_,
+                                                    k1_.t - time_offset_, gyro_, noise_,
+                                                    Eigen::Vector3d(bg_.data()));
+    const AuxGyroFunctor f{pre, src_i, src_j, ix};
+    std::unique_ptr<ceres::CostFunction> ref(
+        MakeDynamicAutoDiff(new AuxGyroFunctor(f), list.sizes(), 3));
+    std::unique_ptr<ceres::CostFunction> split(MakeSplitIntegration(f, list, 3));
+    SCOPED_TRACE("aux gyro");
+    ExpectSplitMatchesOnePass(*split, *ref, list.blocks(),
+                              f.IntegrationBlocks(list.sizes().size()));
+  }
+  {
+    // The base IMU's re-integration factor (eq. 37) between the two keyframes.
+    auto pre = std::make_shared<Preintegration>(aux_samples_, k0_.t, k1_.t, base_, noise_,
+                                                Eigen::Vector3d(k0_.b_g.data()),
+                                                Eigen::Vector3d(k0_.b_a.data()));
+    std::vector<double*> x{k0_.q_W_B.data(), k0_.p_W_B.data(), k0_.v_W.data(),
+                           k0_.b_g.data(),   k0_.b_a.data(),   k1_.q_W_B.data(),
+                           k1_.p_W_B.data(), k1_.v_W.data(),   g_W_.data()};
+    for (double* p : {base_.Dw(), base_.Da(), base_.Tg(), base_.q_rotation()}) {
+      if (p != nullptr)
+        x.push_back(p);
+    }
+    std::unique_ptr<ceres::CostFunction> ref(ReintegrationFactor::Create(pre, base_));
+    std::unique_ptr<ceres::CostFunction> split(ReintegrationFactor::CreateSplit(pre, base_));
+    std::vector<bool> integration(x.size(), true);
+    for (const std::size_t b : {0, 1, 2, 5, 6, 7, 8})
+      integration[b] = false;
+    SCOPED_TRACE("base re-integration");
+    ExpectSplitMatchesOnePass(*split, *ref, x, integration);
+  }
 }
 
 // The gyroscope's rotation preintegration (same nodes and RK4 as the base IMU's) reproduces the

@@ -225,11 +225,16 @@ TEST_F(ReportDataBuilder, KeyframeTrajectoryReadsPosesAsTheResidualsAndInterpola
         0.5 * (Eigen::Vector3d(kf[10].p_W_B.data()) + Eigen::Vector3d(kf[11].p_W_B.data()));
     EXPECT_NEAR((m.p_W_B - mid).norm(), 0.0, 1e-12);
   }
-  // A.1 5 ms after keyframe 10: p_k + v_k s + (R_k a_B + g) s^2 / 2 with the corrected reading.
+  // A.1 5 ms after keyframe 10 (midpoint rule, pose_interpolation.h; the keyframes' raw rates
+  // are zero here, so the reading is the keyframe's): p_k + v_k s + (R_mid a_B + g) s^2 / 2 with
+  // R_mid = R_k Exp(w_B s / 2).
   {
     const double s = 0.005;
     const Se3Kinematics<double> truth = Motion(at(0.5), 2);
-    const Eigen::Vector3d expect = truth.p_W_B + truth.v_W * s + 0.5 * truth.a_W * s * s;
+    const Eigen::Vector3d a_B = truth.R_W_B.transpose() * (truth.a_W - g_W);
+    const Eigen::Vector3d acc_W =
+        truth.R_W_B * (ExpSO3<double>(Eigen::Vector3d(truth.w_B * (0.5 * s))) * a_B) + g_W;
+    const Eigen::Vector3d expect = truth.p_W_B + truth.v_W * s + 0.5 * acc_W * s * s;
     EXPECT_NEAR((traj(at(0.5 + s), 0).p_W_B - expect).norm(), 0.0, 1e-9);
   }
   // Rates and accelerations: exact at the keyframes, the motion's to interpolation accuracy

@@ -40,6 +40,9 @@ struct DiscreteCalibratorOptions {
   int min_views = 10;
   int max_rebuild_rounds = 3;
   bool compute_covariance = true;
+  // One compressed residual block per global-shutter frame (discrete/frame_corners.h); false:
+  // one Jet block per corner (the reference the frame blocks are tested against).
+  bool compress_frames = true;
 };
 
 // The spline result's fields (result rig, outliers, timings, warnings) plus the keyframe count;

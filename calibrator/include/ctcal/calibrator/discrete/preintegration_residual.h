@@ -23,6 +23,7 @@
 #include <memory>
 
 #include "ctcal/calibrator/discrete/preintegration.h"
+#include "ctcal/calibrator/discrete/split_integration.h"
 
 namespace ctcal::discrete {
 
@@ -86,6 +87,12 @@ class ReintegrationFactor {
 
   template <typename T>
   bool operator()(T const* const* x, T* residual) const {
+    return Error<T>(x, Deltas<T>(x), residual);
+  }
+
+  // The deltas re-integrated with the current intrinsics and biases (blocks 3, 4, 9...).
+  template <typename T>
+  PreintegratedDeltas<T> Deltas(T const* const* x) const {
     ImuBlocks<T> blocks;
     int k = 9;
     if (layout_.Dw != MatrixForm::kAbsent)
@@ -96,9 +103,13 @@ class ReintegrationFactor {
       blocks.Tg = x[k++];
     if (layout_.HasRotation())
       blocks.q_rotation = x[k++];
-    const PreintegratedDeltas<T> d =
-        IntegrateDeltas<T>(pre_->readings(), layout_, blocks, Eigen::Map<const Vec3T<T>>(x[3]),
-                           Eigen::Map<const Vec3T<T>>(x[4]));
+    return IntegrateDeltas<T>(pre_->readings(), layout_, blocks, Eigen::Map<const Vec3T<T>>(x[3]),
+                              Eigen::Map<const Vec3T<T>>(x[4]));
+  }
+
+  // The error of the states given the deltas (blocks 0-2, 5-8).
+  template <typename T>
+  bool Error(T const* const* x, const PreintegratedDeltas<T>& d, T* residual) const {
     const Eigen::Matrix<T, 9, 1> r =
         PreintegrationError<T>(d, pre_->dt(), Eigen::Map<const Vec3T<T>>(x[8]),
                                Eigen::Map<const QuatT<T>>(x[0]), Eigen::Map<const Vec3T<T>>(x[1]),
@@ -109,24 +120,48 @@ class ReintegrationFactor {
     return true;
   }
 
+  // The block sizes in the order above.
+  static std::vector<int> BlockSizes(const ImuIntrinsics& intrinsics) {
+    std::vector<int> sizes{4, 3, 3, 3, 3, 4, 3, 3, 3};
+    for (int size : {intrinsics.DwSize(), intrinsics.DaSize(), intrinsics.TgSize()})
+      if (size > 0)
+        sizes.push_back(size);
+    if (intrinsics.layout().HasRotation())
+      sizes.push_back(4);
+    return sizes;
+  }
+
+  // One Jet pass over every block (the reference of CreateSplit).
   static ceres::CostFunction* Create(std::shared_ptr<const Preintegration> pre,
                                      const ImuIntrinsics& intrinsics) {
     auto* cost = new ceres::DynamicAutoDiffCostFunction<ReintegrationFactor, kStride>(
         new ReintegrationFactor(std::move(pre), intrinsics));
-    for (int size : {4, 3, 3, 3, 3, 4, 3, 3, 3})
+    for (const int size : BlockSizes(intrinsics))
       cost->AddParameterBlock(size);
-    for (int size : {intrinsics.DwSize(), intrinsics.DaSize(), intrinsics.TgSize()})
-      if (size > 0)
-        cost->AddParameterBlock(size);
-    if (intrinsics.layout().HasRotation())
-      cost->AddParameterBlock(4);
     cost->SetNumResiduals(9);
     return cost;
   }
+
+  // The same residual, the re-integration differentiated only with respect to the biases and
+  // intrinsics (split_integration.h).
+  static ceres::CostFunction* CreateSplit(std::shared_ptr<const Preintegration> pre,
+                                          const ImuIntrinsics& intrinsics);
 
  private:
   std::shared_ptr<const Preintegration> pre_;
   ImuModelLayout layout_;
 };
+
+inline ceres::CostFunction* ReintegrationFactor::CreateSplit(
+    std::shared_ptr<const Preintegration> pre, const ImuIntrinsics& intrinsics) {
+  const std::vector<int> sizes = BlockSizes(intrinsics);
+  std::vector<bool> integration(sizes.size(), false);
+  integration[3] = integration[4] = true;
+  for (std::size_t b = 9; b < sizes.size(); ++b)
+    integration[b] = true;
+  return new SplitIntegrationCost<ReintegrationFactor>(
+      std::make_shared<const ReintegrationFactor>(std::move(pre), intrinsics), sizes,
+      std::move(integration), 9);
+}
 
 }  // namespace ctcal::discrete
