@@ -54,10 +54,10 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
-#include <Eigen/QR>
 #include <vector>
 
 #include "ctcal/calibrator/residuals/corner_residual.h"
+#include "ctcal/calibrator/residuals/frame_corners_compression.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 #include "ctcal/sensors/camera_model.h"
 
@@ -139,52 +139,11 @@ class FrameCornersResidual {
       const Eigen::Matrix3d R_C_W = R_C_B * kin.R_W_B.transpose();
       const Eigen::Vector3d t_C_W = -R_C_W * kin.p_W_B - R_C_B * t_B_C;
 
-      // [J | e] of every corner, weighted for the robust stage.
-      const int M = NumCorners();
-      Eigen::Matrix<double, Eigen::Dynamic, kNx + 1> A(2 * M, kNx + 1);
-      double remainder = 0.0;  // sum rho(s_i) - rho'(s_i) s_i
-      Eigen::Matrix<double, 2, 3> J_uv_p;
-      Eigen::Matrix<double, 2, Model::kNumParams> J_uv_params;
-      for (int i = 0; i < M; ++i) {
-        const CornerMeasurement& m = corners_[static_cast<std::size_t>(i)];
-        const Eigen::Vector3d p_C = R_C_W * m.p_W + t_C_W;
-        Eigen::Vector2d uv;
-        if (!Model::template Project<double>(p[kParams], p_C, &uv, &J_uv_p, &J_uv_params))
-          return false;
-        const Eigen::Vector2d e = (m.uv - uv) / m.sigma_px;
-        double w = 1.0 / m.sigma_px;
-        if (huber_ > 0.0) {
-          const double s = e.squaredNorm();
-          if (s > huber_ * huber_) {
-            const double root = std::sqrt(s);
-            const double rho1 = huber_ / root;  // rho'(s)
-            remainder += (2.0 * huber_ * root - huber_ * huber_) - rho1 * s;
-            w *= std::sqrt(rho1);
-          }
-        }
-        auto rows = A.template middleRows<2>(2 * i);
-        // d e / d x = -(1/sigma) [P [-[p_C]x, I], J_uv_params]; the sign is irrelevant to the
-        // factor (R^T R, R^T z are invariant under flipping J and e together) but kept for R.
-        rows.template leftCols<3>() = w * (J_uv_p * Hat<double>(p_C));
-        rows.template middleCols<3>(3) = -w * J_uv_p;
-        rows.template middleCols<Model::kNumParams>(6) = -w * J_uv_params;
-        rows.col(kNx) = (w * m.sigma_px) * e;
-      }
-      const Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, kNx + 1>> qr(A);
-      const auto& QR = qr.matrixQR();
-      const int rows = std::min(2 * M, kNx + 1);
-      // R (upper triangle of the first kNx columns), z and rho; rows beyond 2M are zero.
-      MatX R = MatX::Zero();
-      Eigen::Map<Eigen::Matrix<double, kNx + 1, 1>> r(residuals);
-      r.setZero();
-      for (int k = 0; k < rows; ++k) {
-        for (int j = k; j < kNx; ++j)
-          R(k, j) = QR(k, j);
-        if (k < kNx)
-          r(k) = QR(k, kNx);
-      }
-      const double rho = rows == kNx + 1 ? QR(kNx, kNx) : 0.0;
-      r(kNx) = std::sqrt(rho * rho + std::max(remainder, 0.0));
+      // [J | e] of every corner, weighted for the robust stage, QR-compressed to [R | z] and the
+      // remainder row (frame_corners_compression.h; this file's comment derives it).
+      MatX R;
+      if (!CompressFrameCorners<Model>(corners_, p[kParams], R_C_W, t_C_W, huber_, residuals, &R))
+        return false;
       if (jacobians == nullptr)
         return true;
 
