@@ -174,19 +174,7 @@ class DiscreteProblem {
       if (P.HasParameterBlock(b.values) && !b.estimated)
         P.SetParameterBlockConstant(b.values);
     }
-    for (PreparedCamera& cam : prep_.cameras) {
-      Eigen::VectorXd lo, hi;
-      cam.state->camera->ParamBounds(&lo, &hi);
-      double* p = cam.state->camera->mutable_params();
-      if (!P.HasParameterBlock(p))
-        continue;
-      for (int i = 0; i < lo.size(); ++i) {
-        if (std::isfinite(lo(i)))
-          P.SetParameterLowerBound(p, i, lo(i));
-        if (std::isfinite(hi(i)))
-          P.SetParameterUpperBound(p, i, hi(i));
-      }
-    }
+    spline_internal::BoundCameraParameters(prep_.cameras, &P);
   }
 
   ceres::Solver::Summary Solve() {

@@ -89,6 +89,25 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
              const SplineCalibratorOptions& options, const CoarseInitResult& init,
              const CalibrationLog& log, Prepared* prep);
 
+// Every camera's intrinsic bounds (CameraModel::ParamBounds: e.g. xi, alpha) on its parameter
+// block, where the problem has that block. Shared with the discrete calibrator.
+inline void BoundCameraParameters(const std::vector<PreparedCamera>& cameras,
+                                  ceres::Problem* problem) {
+  for (const PreparedCamera& cam : cameras) {
+    Eigen::VectorXd lo, hi;
+    cam.state->camera->ParamBounds(&lo, &hi);
+    double* p = cam.state->camera->mutable_params();
+    if (!problem->HasParameterBlock(p))
+      continue;
+    for (int i = 0; i < lo.size(); ++i) {
+      if (std::isfinite(lo(i)))
+        problem->SetParameterLowerBound(p, i, lo(i));
+      if (std::isfinite(hi(i)))
+        problem->SetParameterUpperBound(p, i, hi(i));
+    }
+  }
+}
+
 // Priors of `prior_sigma` on the estimated blocks, centred on `centers` (one per block, the
 // input's guesses); returns their residual ids. Shared with the discrete calibrator.
 std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
@@ -243,17 +262,7 @@ class SplineProblem {
       if (!b.estimated)
         P.SetParameterBlockConstant(b.values);
     }
-    for (PreparedCamera& cam : prep_.cameras) {
-      Eigen::VectorXd lo, hi;
-      cam.state->camera->ParamBounds(&lo, &hi);
-      double* p = cam.state->camera->mutable_params();
-      for (int i = 0; i < lo.size(); ++i) {
-        if (std::isfinite(lo(i)))
-          P.SetParameterLowerBound(p, i, lo(i));
-        if (std::isfinite(hi(i)))
-          P.SetParameterUpperBound(p, i, hi(i));
-      }
-    }
+    BoundCameraParameters(prep_.cameras, &P);
   }
 
   ceres::Solver::Summary Solve() {
