@@ -13,25 +13,6 @@ double Seconds(std::int64_t t_ns) {
   return static_cast<double>(t_ns) * 1e-9;
 }
 
-// Linear interpolation of the rate at time t (s); false outside the samples' span.
-bool InterpolateRate(const std::vector<RateSample>& rates, double t, Eigen::Vector3d* w) {
-  if (rates.size() < 2 || t < Seconds(rates.front().t_ns) || t > Seconds(rates.back().t_ns))
-    return false;
-  const auto it =
-      std::lower_bound(rates.begin(), rates.end(), t,
-                       [](const RateSample& r, double value) { return Seconds(r.t_ns) < value; });
-  if (it == rates.begin()) {
-    *w = it->w_S;
-    return true;
-  }
-  const RateSample& b = *it;
-  const RateSample& a = *(it - 1);
-  const double ta = Seconds(a.t_ns), tb = Seconds(b.t_ns);
-  const double s = tb > ta ? (t - ta) / (tb - ta) : 0.0;
-  *w = (1.0 - s) * a.w_S + s * b.w_S;
-  return true;
-}
-
 }  // namespace
 
 std::vector<RateSample> RatesFromImu(const std::vector<ImuSample>& samples) {
@@ -86,37 +67,72 @@ Eigen::Vector3d MedianRate(const std::vector<RateSample>& rates) {
   return median;
 }
 
-bool RateOfBaseOver(const std::vector<RateSample>& base, double t0, double t1,
-                    Eigen::Vector3d* w_B) {
-  if (t1 <= t0)
-    return InterpolateRate(base, t0, w_B);
-  Eigen::Vector3d w0, w1;
-  if (!InterpolateRate(base, t0, &w0) || !InterpolateRate(base, t1, &w1))
+BaseRateIntegral::BaseRateIntegral(const std::vector<RateSample>& base) {
+  t_.reserve(base.size());
+  w_.reserve(base.size());
+  q_.reserve(base.size());
+  for (const RateSample& r : base) {
+    const double t = Seconds(r.t_ns);
+    q_.push_back(q_.empty() ? Eigen::Quaterniond::Identity()
+                            : (q_.back() * ExpSO3<double>(Eigen::Vector3d(
+                                               0.5 * (w_.back() + r.w_S) * (t - t_.back()))))
+                                  .normalized());
+    t_.push_back(t);
+    w_.push_back(r.w_S);
+  }
+}
+
+std::size_t BaseRateIntegral::Locate(double t, std::size_t* cursor) const {
+  std::size_t k = std::min(*cursor, t_.size() - 1);
+  if (t_[k] > t) {
+    k = static_cast<std::size_t>(
+            std::upper_bound(t_.begin(), t_.begin() + static_cast<long>(k), t) - t_.begin()) -
+        1;
+  } else {
+    // A few steps forward (the next query of a sweep), else a search over the rest.
+    int steps = 0;
+    while (k + 1 < t_.size() && t_[k + 1] <= t && ++steps < 16)
+      ++k;
+    if (steps == 16)
+      k = static_cast<std::size_t>(
+              std::upper_bound(t_.begin() + static_cast<long>(k), t_.end(), t) - t_.begin()) -
+          1;
+  }
+  *cursor = k;
+  return k;
+}
+
+Eigen::Vector3d BaseRateIntegral::RateAt(std::size_t k, double t) const {
+  if (k + 1 == t_.size())
+    return w_[k];
+  const double s = t_[k + 1] > t_[k] ? (t - t_[k]) / (t_[k + 1] - t_[k]) : 0.0;
+  return (1.0 - s) * w_[k] + s * w_[k + 1];
+}
+
+bool BaseRateIntegral::RateOver(double t0, double t1, Eigen::Vector3d* w_B,
+                                std::size_t* cursor) const {
+  if (t_.size() < 2 || t0 < t_.front() || t0 > t_.back())
     return false;
-  // Breakpoints: the interval's ends and every gyro sample inside; on each piece the rate is
-  // linear, so its midpoint value integrates it to second order.
-  auto it = std::upper_bound(base.begin(), base.end(), t0, [](double value, const RateSample& r) {
-    return value < Seconds(r.t_ns);
-  });
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  double ta = t0;
-  Eigen::Vector3d wa = w0;
-  while (true) {
-    double tb;
-    Eigen::Vector3d wb;
-    if (it != base.end() && Seconds(it->t_ns) < t1) {
-      tb = Seconds(it->t_ns);
-      wb = it->w_S;
-      ++it;
-    } else {
-      tb = t1;
-      wb = w1;
-    }
-    q = q * ExpSO3<double>(Eigen::Vector3d(0.5 * (wa + wb) * (tb - ta)));
-    ta = tb;
-    wa = wb;
-    if (tb >= t1)
-      break;
+  const std::size_t k0 = Locate(t0, cursor);
+  if (t1 <= t0) {
+    *w_B = RateAt(k0, t0);
+    return true;
+  }
+  if (t1 > t_.back())
+    return false;
+  std::size_t scan = k0;
+  const std::size_t k1 = Locate(t1, &scan);
+  const Eigen::Vector3d w0 = RateAt(k0, t0), w1 = RateAt(k1, t1);
+  // The samples strictly inside (t0, t1): a .. b.
+  const std::size_t a = k0 + 1;
+  const std::size_t b = t_[k1] < t1 ? k1 : k1 - 1;
+  Eigen::Quaterniond q;
+  if (a > b) {
+    q = ExpSO3<double>(Eigen::Vector3d(0.5 * (w0 + w1) * (t1 - t0)));
+  } else {
+    q = ExpSO3<double>(Eigen::Vector3d(0.5 * (w0 + w_[a]) * (t_[a] - t0))) *
+        (q_[a].conjugate() * q_[b]) *
+        ExpSO3<double>(Eigen::Vector3d(0.5 * (w_[b] + w1) * (t1 - t_[b])));
   }
   *w_B = LogSO3<double>(q.normalized()) / (t1 - t0);
   return true;

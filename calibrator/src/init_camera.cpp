@@ -381,10 +381,10 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
 
 BoardPosesResult InitBoardPoses(const std::string& camera_name, const CameraModel& camera,
                                 const Board& board, const std::vector<CornerObservation>& corners,
-                                int min_corners, int min_views, const InitLog& log) {
+                                int min_corners, int min_views, const InitLog& log, int threads) {
   constexpr const char* kStage = "board poses";
   BoardPosesResult result;
-  result.views = EstimateBoardViews(camera, board, corners, min_corners);
+  result.views = EstimateBoardViews(camera, board, corners, min_corners, threads);
   std::vector<std::int64_t> stamps;
   for (const CornerObservation& c : corners)
     if (stamps.empty() || stamps.back() != c.t_ns)

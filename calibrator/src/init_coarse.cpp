@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <limits>
 #include <optional>
 #include <utility>
@@ -246,11 +247,18 @@ class CoarseInit {
         s.camera->SetParams(r->camera.params());
       }
     }
+    CoarseInitResult::CameraViews& handed = result_.board_views[s.name()];
+    handed.params = s.camera->params();
+    handed.min_corners = std::min(options_.min_corners, options_.views_min_corners);
+    handed.views = InitBoardPoses(s.name(), *s.camera, board_, d.corners, handed.min_corners, 0,
+                                  stage_log_, options_.threads)
+                       .views;
     CameraViews cam;
     cam.state = &s;
-    cam.views =
-        InitBoardPoses(s.name(), *s.camera, board_, d.corners, options_.min_corners, 0, stage_log_)
-            .views;
+    for (const BoardView& v : handed.views) {
+      if (v.inliers >= options_.min_corners)
+        cam.views.push_back(v);
+    }
     if (static_cast<int>(cam.views.size()) < options_.min_views)
       throw too_few(static_cast<int>(cam.views.size()));
     cam.rates = RatesFromBoardViews(cam.views);
@@ -295,6 +303,7 @@ class CoarseInit {
       r.t_ns += Nanoseconds(guess);
     TimeOffsetOptions to;
     to.max_offset = options_.max_offset_s;
+    to.threads = options_.threads;
     TimeOffsetResult r;
     try {
       r = InitTimeOffset(s.name(), base_rates_, shifted, to, stage_log_);
@@ -447,6 +456,7 @@ CoarseInitResult InitializeFromData(CalibrationState* state,
     return result;
   }
   const auto t_start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   if (log)
     log(std::string("[init] coarse-guess initialisation (policy ") + PolicyName(options.policy) +
         ")");
@@ -462,7 +472,8 @@ CoarseInitResult InitializeFromData(CalibrationState* state,
     std::string replaced;
     for (const std::string& r : result.replaced)
       replaced += " " + r;
-    log(Format("  initialisation done in %.2f s; taken from the data:", result.seconds) +
+    log(Format("  initialisation done in %.2f s (CPU %.2f s); taken from the data:", result.seconds,
+               static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC) +
         (replaced.empty() ? std::string(" nothing (every guess agrees with its prior)")
                           : replaced));
   }

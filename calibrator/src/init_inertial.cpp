@@ -112,12 +112,20 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name,
                                   const std::vector<RateSample>& base_rates,
                                   const std::vector<RateSample>& sensor_rates, double time_offset,
                                   const HandEyeOptions& options, const InitLog& log) {
+  return InitRotationHandEye(sensor_name, BaseRateIntegral(base_rates), sensor_rates, time_offset,
+                             options, log);
+}
+
+HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRateIntegral& base,
+                                  const std::vector<RateSample>& sensor_rates, double time_offset,
+                                  const HandEyeOptions& options, const InitLog& log) {
   constexpr const char* kStage = "hand-eye rotation";
   std::vector<Eigen::Vector3d> w_B, w_S;
+  std::size_t cursor = 0;
   for (const RateSample& r : sensor_rates) {
     const double t = Seconds(r.t_ns) + time_offset;
     Eigen::Vector3d w;
-    if (!RateOfBaseOver(base_rates, t - 0.5 * r.span, t + 0.5 * r.span, &w))
+    if (!base.RateOver(t - 0.5 * r.span, t + 0.5 * r.span, &w, &cursor))
       continue;
     w_B.push_back(w);
     w_S.push_back(r.w_S);

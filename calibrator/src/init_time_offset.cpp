@@ -1,12 +1,13 @@
 #include "ctcal/calibrator/init/time_offset_init.h"
 
-#include <limits>
-
-#include "ctcal/calibrator/init/inertial_init.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <optional>
+
+#include "ctcal/calibrator/init/inertial_init.h"
+#include "parallel_for.h"
 
 namespace ctcal {
 
@@ -24,15 +25,16 @@ struct Correlation {
 };
 
 // Pearson correlation of the sensor's rate magnitudes with the base's at the shifted times.
-Correlation CorrelateAt(const std::vector<RateSample>& base, const std::vector<double>& sensor_t,
+Correlation CorrelateAt(const BaseRateIntegral& base, const std::vector<double>& sensor_t,
                         const std::vector<double>& sensor_span,
                         const std::vector<double>& sensor_mag, double lag) {
   double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
   int n = 0;
+  std::size_t cursor = 0;
   for (std::size_t k = 0; k < sensor_t.size(); ++k) {
     const double t = sensor_t[k] + lag;
     Eigen::Vector3d w_B;
-    if (!RateOfBaseOver(base, t - 0.5 * sensor_span[k], t + 0.5 * sensor_span[k], &w_B))
+    if (!base.RateOver(t - 0.5 * sensor_span[k], t + 0.5 * sensor_span[k], &w_B, &cursor))
       continue;
     const double x = sensor_mag[k];
     const double y = w_B.norm();
@@ -82,6 +84,11 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   std::vector<RateSample> base = base_rates;
   for (RateSample& r : base)
     r.w_S -= bias_B;
+  const BaseRateIntegral base_integral(base_rates);
+  std::optional<BaseRateIntegral> centred;
+  if (options.remove_median_bias)
+    centred.emplace(base);
+  const BaseRateIntegral& correlated = centred ? *centred : base_integral;
   std::vector<RateSample> gyro_part;
   for (const RateSample& r : sensor_rates)
     if (r.span == 0.0)
@@ -111,9 +118,11 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   // Coarse search on the lag grid.
   const int half = static_cast<int>(std::round(options.max_offset / options.coarse_step));
   std::vector<double> corr(static_cast<std::size_t>(2 * half + 1));
-  for (int i = -half; i <= half; ++i)
-    corr[static_cast<std::size_t>(i + half)] =
-        CorrelateAt(base, sensor_t, sensor_span, sensor_mag, i * options.coarse_step).value;
+  ParallelFor(options.threads, corr.size(), [&](std::size_t i) {
+    corr[i] = CorrelateAt(correlated, sensor_t, sensor_span, sensor_mag,
+                          (static_cast<int>(i) - half) * options.coarse_step)
+                  .value;
+  });
   const int p = static_cast<int>(std::max_element(corr.begin(), corr.end()) - corr.begin());
   // The main lobe: from the peak down to the first local minimum on each side.
   int lo = p, hi = p;
@@ -166,10 +175,11 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   // Fine grid around the coarse peak, then a parabola through the best point's neighbours.
   const int fine_half = static_cast<int>(std::ceil(2.0 * options.coarse_step / options.fine_step));
   std::vector<double> fine(static_cast<std::size_t>(2 * fine_half + 1));
-  for (int i = -fine_half; i <= fine_half; ++i)
-    fine[static_cast<std::size_t>(i + fine_half)] =
-        CorrelateAt(base, sensor_t, sensor_span, sensor_mag, coarse_lag + i * options.fine_step)
-            .value;
+  ParallelFor(options.threads, fine.size(), [&](std::size_t i) {
+    fine[i] = CorrelateAt(correlated, sensor_t, sensor_span, sensor_mag,
+                          coarse_lag + (static_cast<int>(i) - fine_half) * options.fine_step)
+                  .value;
+  });
   int q = static_cast<int>(std::max_element(fine.begin(), fine.end()) - fine.begin());
   q = std::clamp(q, 1, 2 * fine_half - 1);
   const double ym = fine[static_cast<std::size_t>(q - 1)];
@@ -190,16 +200,18 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
     auto cost = [&](double lag) {
       try {
         const double rms =
-            InitRotationHandEye(sensor_name, base_rates, sensor_rates, lag, hand_eye, {}).rms_rad_s;
+            InitRotationHandEye(sensor_name, base_integral, sensor_rates, lag, hand_eye, {})
+                .rms_rad_s;
         return rms * rms;
       } catch (const InitError&) {
         return std::numeric_limits<double>::infinity();
       }
     };
     const int m = static_cast<int>(std::round(options.refine_half_width / options.refine_step));
-    std::vector<double> costs;
-    for (int i = -m; i <= m; ++i)
-      costs.push_back(cost(result.time_offset + i * options.refine_step));
+    std::vector<double> costs(static_cast<std::size_t>(2 * m + 1));
+    ParallelFor(options.threads, costs.size(), [&](std::size_t i) {
+      costs[i] = cost(result.time_offset + (static_cast<int>(i) - m) * options.refine_step);
+    });
     int b = static_cast<int>(std::min_element(costs.begin(), costs.end()) - costs.begin());
     if (std::isfinite(costs[static_cast<std::size_t>(b)]) && b > 0 && b < 2 * m) {
       const double cm = costs[static_cast<std::size_t>(b - 1)];
@@ -211,7 +223,7 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
     }
   }
   const Correlation at_peak =
-      CorrelateAt(base, sensor_t, sensor_span, sensor_mag, result.time_offset);
+      CorrelateAt(correlated, sensor_t, sensor_span, sensor_mag, result.time_offset);
   result.peak_correlation = std::max(result.peak_correlation, at_peak.value);
   result.samples = at_peak.samples;
   result.summary = sensor_name + ": " +

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <limits>
 #include <sstream>
 #include <thread>
@@ -81,7 +82,16 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
       throw CalibrationInputError("sensors." + s.name() + ": the camera never sees the board");
     PreparedCamera cam;
     cam.state = &s;
-    cam.views = EstimateBoardViews(*s.camera, board, d.corners, options.min_corners_per_view);
+    // The initialisation's views when it solved them with this camera and threshold.
+    const auto handed = init.board_views.find(s.name());
+    if (handed != init.board_views.end() &&
+        handed->second.min_corners == options.min_corners_per_view &&
+        handed->second.params.size() == s.camera->params().size() &&
+        handed->second.params == s.camera->params())
+      cam.views = handed->second.views;
+    else
+      cam.views = EstimateBoardViews(*s.camera, board, d.corners, options.min_corners_per_view,
+                                     options.threads);
     if (static_cast<int>(cam.views.size()) < options.min_views)
       throw CalibrationInputError(
           "sensors." + s.name() + ": too few views of the board (" +
@@ -485,11 +495,18 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
 
   log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu);
   CalibrationState state(rig);
+  options.coarse_init.threads = options.threads;
+  options.coarse_init.views_min_corners = options.min_corners_per_view;
   const CoarseInitResult init = InitializeFromData(&state, data, options.coarse_init, log);
   Prepared prep;
   log("[2/6] board views and data selection");
+  const auto t_prepare = std::chrono::steady_clock::now();
+  const std::clock_t cpu_prepare = std::clock();
   Prepare(&state, data, options, init, log, &prep);
   SeedBiasSplines(init, &state);
+  log(Fmt("  board views and data selection: %.2f s (CPU %.2f s)",
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_prepare).count(),
+          static_cast<double>(std::clock() - cpu_prepare) / CLOCKS_PER_SEC));
   log(Fmt("  trajectory: %.3f .. %.3f s (base clock), knot spacing %.4f s",
           1e-9 * static_cast<double>(prep.t0_ns), 1e-9 * static_cast<double>(prep.t1_ns),
           prep.knot_spacing_s));

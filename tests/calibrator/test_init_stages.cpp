@@ -297,6 +297,37 @@ TEST(InitTimeOffsetSynthetic, SubSamplePrecision) {
   }
 }
 
+// The lags (and the hand-eye refinement's offsets) are evaluated on several threads: the result
+// is the same to the bit, for gyro samples (span 0) and camera intervals (span > 0) alike.
+TEST(InitTimeOffsetSynthetic, ThreadsDoNotChangeTheResult) {
+  auto w = [](double t) {
+    return Eigen::Vector3d(std::sin(1.3 * t) + 0.5 * std::sin(3.1 * t + 1.0),
+                           0.8 * std::cos(0.7 * t) * std::sin(2.3 * t), 0.6 * std::sin(4.7 * t));
+  };
+  std::vector<RateSample> base, gyro, camera;
+  for (int k = 0; k < 2500; ++k)
+    base.push_back({static_cast<std::int64_t>(1e9 + k * 4e6), w(1.0 + k * 4e-3), 0.0});
+  for (int k = 0; k < 1500; ++k) {
+    const double t_S = 1.2 + k * (1.0 / 180.0);
+    gyro.push_back({static_cast<std::int64_t>(std::llround(t_S * 1e9)), w(t_S + 0.0123), 0.0});
+  }
+  for (int k = 0; k < 160; ++k) {
+    const double t_S = 1.3 + k * 0.05;  // 20 Hz views: the mean rate over each 50 ms interval
+    camera.push_back({static_cast<std::int64_t>(std::llround(t_S * 1e9)), w(t_S - 0.021), 0.05});
+  }
+  for (const auto* rates : {&gyro, &camera}) {
+    TimeOffsetOptions serial, parallel;
+    parallel.threads = 2;
+    const TimeOffsetResult a = InitTimeOffset("s", base, *rates, serial, {});
+    const TimeOffsetResult b = InitTimeOffset("s", base, *rates, parallel, {});
+    EXPECT_EQ(a.time_offset, b.time_offset);
+    EXPECT_EQ(a.correlation_offset, b.correlation_offset);
+    EXPECT_EQ(a.peak_correlation, b.peak_correlation);
+    EXPECT_EQ(a.secondary_correlation, b.secondary_correlation);
+    EXPECT_EQ(a.samples, b.samples);
+  }
+}
+
 // No rotation: the correlation is ambiguous and the stage says so.
 TEST(InitTimeOffsetSynthetic, NoRotationIsAmbiguous) {
   std::vector<RateSample> base, sensor;

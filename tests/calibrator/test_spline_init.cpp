@@ -62,6 +62,50 @@ TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
   }
 }
 
+// The board views are solved per frame in parallel and handed from the coarse initialisation
+// (solved at the calibrator's 8-corner threshold, its stages taking those with >= 12 inliers) to
+// the calibrator: neither may change a bit of a pose. Checked on the guessed (table4) camera, as
+// the calibrator runs them.
+TEST(SplineInit, BoardViewsDoNotDependOnThreadsOrTheHandOver) {
+  const std::string dir = ::testing::TempDir() + "/ctcal_spline_init_22";
+  const std::string cmd = std::string(CTCAL_BINARY) +
+                          " simulate --scenario full --seed 22 --duration 3 --perturb table4 "
+                          "--out " +
+                          dir + " > /dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::vector<std::string> warnings;
+  const RigConfig rig = LoadRig(dir + "/rig.yaml", &warnings);
+  const auto data = LoadDataset(dir, rig, &warnings);
+  const Board board(rig.target);
+  const auto same = [](const BoardView& a, const BoardView& b) {
+    return a.t_ns == b.t_ns && a.T_C_W.matrix() == b.T_C_W.matrix() && a.corners == b.corners &&
+           a.inliers == b.inliers && a.rms_ray_error == b.rms_ray_error;
+  };
+  for (const char* name : {"cam0", "cam1"}) {
+    const SensorConfig& c = *rig.Find(name);
+    const CameraModel camera =
+        CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
+                            Eigen::Vector2i(c.width, c.height));
+    const auto& corners = data.at(name).corners;
+    const std::vector<BoardView> serial = EstimateBoardViews(camera, board, corners, 8, 1);
+    const std::vector<BoardView> parallel = EstimateBoardViews(camera, board, corners, 8, 2);
+    ASSERT_GT(serial.size(), 40u) << name;
+    ASSERT_EQ(serial.size(), parallel.size()) << name;
+    for (std::size_t i = 0; i < serial.size(); ++i)
+      EXPECT_TRUE(same(serial[i], parallel[i])) << name << " view " << i;
+    // The stages' views: a 12-corner run equals the 8-corner views with >= 12 inliers.
+    std::vector<BoardView> filtered;
+    for (const BoardView& v : serial) {
+      if (v.inliers >= 12)
+        filtered.push_back(v);
+    }
+    const std::vector<BoardView> twelve = EstimateBoardViews(camera, board, corners, 12, 2);
+    ASSERT_EQ(filtered.size(), twelve.size()) << name;
+    for (std::size_t i = 0; i < twelve.size(); ++i)
+      EXPECT_TRUE(same(filtered[i], twelve[i])) << name << " view " << i;
+  }
+}
+
 // The initial trajectory fit (spline_trajectory_fit.h) on the true calibration: from knots at the
 // nearest board-view pose (errors of degrees and centimetres between views), Gauss-Newton on the
 // poses and the base IMU (corrected by its true intrinsics and biases) must recover the simulated

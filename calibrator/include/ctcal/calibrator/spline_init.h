@@ -25,10 +25,11 @@ struct BoardView {
 // Board pose of every frame with at least `min_corners` corners whose rays the guessed camera
 // model can unproject: each corner's ray (any camera model) goes on the normalised plane z = 1,
 // then PnP with identity K (IPPE, refined) and a refinement after a robust outlier gate. Frames
-// whose pose fails (too few inliers, board behind the camera) are skipped.
+// whose pose fails (too few inliers, board behind the camera) are skipped. Frames are solved on
+// up to `threads` threads; the result does not depend on their number.
 std::vector<BoardView> EstimateBoardViews(const CameraModel& camera, const Board& board,
                                           const std::vector<CornerObservation>& corners,
-                                          int min_corners);
+                                          int min_corners, int threads = 1);
 
 // A pose of the base frame at a base-clock time.
 struct TimedPose {

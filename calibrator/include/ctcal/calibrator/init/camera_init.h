@@ -68,12 +68,13 @@ struct BoardPosesResult {
 
 // Stage 2a. Board pose of every frame with >= min_corners corners, for any camera model: corners
 // unprojected to rays, PnP on the normalised plane with RANSAC (IPPE on minimal sets), refined on
-// the inliers (EstimateBoardViews). Throws InitError (stage "board poses") naming the camera when
-// fewer than min_views frames give a pose (e.g. a camera without views).
+// the inliers (EstimateBoardViews, frames on `threads` threads). Throws InitError (stage "board
+// poses") naming the camera when fewer than min_views frames give a pose (e.g. a camera without
+// views).
 BoardPosesResult InitBoardPoses(const std::string& camera_name, const CameraModel& camera,
                                 const Board& board, const std::vector<CornerObservation>& corners,
                                 int min_corners = 12, int min_views = 3,
-                                const InitLog& log = LogInitToStderr);
+                                const InitLog& log = LogInitToStderr, int threads = 1);
 
 struct RelativePoseResult {
   Eigen::Isometry3d T_Ci_Cj = Eigen::Isometry3d::Identity();  // p_Ci = T_Ci_Cj p_Cj

@@ -51,6 +51,12 @@ struct CoarseInitOptions {
   double offset_accuracy_s = 2e-3;
   int min_corners = 12;  // corners a frame needs for a board pose in the stages
   int min_views = 10;    // board views a camera needs (as SplineCalibratorOptions::min_views)
+  // The board views are solved once, for every frame with >= views_min_corners corners (the
+  // calibrator's own threshold, SplineCalibratorOptions::min_corners_per_view), and handed over
+  // (CoarseInitResult::board_views); the stages use those with >= min_corners PnP inliers, which
+  // are exactly the views a min_corners run would give.
+  int views_min_corners = 8;
+  int threads = 1;  // PnP per frame, correlation per lag
   IntrinsicsInitOptions intrinsics;
   HandEyeOptions hand_eye;
   LeverArmOptions lever_arm;
@@ -66,6 +72,15 @@ struct CoarseInitResult {
   // How far each sensor's time offset may still move in the full problem, s: the stage's
   // accuracy where the offset was found here, else 3 prior sigmas, else the search range.
   std::map<std::string, double> offset_uncertainty_s;
+  // Board views of every camera, solved at the camera's final intrinsics `params` for frames with
+  // >= min_corners corners: the calibrator takes them instead of solving every PnP again when its
+  // camera and threshold are the same.
+  struct CameraViews {
+    Eigen::VectorXd params;
+    int min_corners = 0;
+    std::vector<BoardView> views;
+  };
+  std::map<std::string, CameraViews> board_views;
   std::vector<std::string> replaced;  // "<sensor>.<key>" of every value taken from the data
   std::vector<std::string> warnings;  // also logged
   double seconds = 0.0;

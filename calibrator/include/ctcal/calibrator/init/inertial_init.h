@@ -41,6 +41,11 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name,
                                   const std::vector<RateSample>& sensor_rates, double time_offset,
                                   const HandEyeOptions& options = {},
                                   const InitLog& log = LogInitToStderr);
+// The same with the base gyro already integrated (for repeated calls on one base).
+HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRateIntegral& base,
+                                  const std::vector<RateSample>& sensor_rates, double time_offset,
+                                  const HandEyeOptions& options = {},
+                                  const InitLog& log = LogInitToStderr);
 
 struct LeverArmOptions {
   double diff_half_window = 0.02;  // s, central difference of the base gyro for alpha_B

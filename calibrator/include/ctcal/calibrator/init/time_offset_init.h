@@ -29,6 +29,8 @@ struct TimeOffsetOptions {
   // correlation peak; 0 disables it.
   double refine_half_width = 3e-3;  // s
   double refine_step = 2e-4;        // s
+  // Lags are evaluated on this many threads (the result does not depend on it).
+  int threads = 1;
 };
 
 struct TimeOffsetResult {
