@@ -7,7 +7,9 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <unordered_set>
 
@@ -27,7 +29,7 @@ SparseRowMajor ToEigen(const ceres::CRSMatrix& crs) {
 
 MarginalInformation ComputeMarginalInformation(
     ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
-    const std::vector<ceres::ResidualBlockId>& residual_blocks) {
+    const std::vector<ceres::ResidualBlockId>& residual_blocks, int threads) {
   MarginalInformation out;
   std::unordered_set<const double*> calib_set;
   std::vector<double*> calib_blocks;
@@ -68,24 +70,39 @@ MarginalInformation ComputeMarginalInformation(
   // of a long recording would hold hundreds of MB at once (docs/performance.md, memory).
   const int n = out.nuisance_dimension;
   const int c = static_cast<int>(units.size());
+  // With threads > 1 a chunk's J^T J is summed on a second thread while the next chunk is
+  // evaluated (Problem::Evaluate is not re-entrant): the same sums in the same order, and at most
+  // two chunks' Jacobians alive.
   constexpr std::size_t kChunk = 4096;
   SparseColMajor H(n + c, n + c);
+  const auto accumulate = [&H](const ceres::CRSMatrix& crs) {
+    const SparseRowMajor J = ToEigen(crs);
+    H += SparseColMajor(SparseColMajor(J.transpose()) * J);
+  };
+  std::future<void> summing;
   for (std::size_t first = 0; first < all_residuals.size(); first += kChunk) {
     const std::size_t last = std::min(all_residuals.size(), first + kChunk);
     eval.residual_blocks.assign(all_residuals.begin() + static_cast<std::ptrdiff_t>(first),
                                 all_residuals.begin() + static_cast<std::ptrdiff_t>(last));
     double cost = 0.0;
-    ceres::CRSMatrix crs;
-    if (!problem.Evaluate(eval, &cost, nullptr, nullptr, &crs) || !std::isfinite(cost)) {
+    auto crs = std::make_shared<ceres::CRSMatrix>();
+    const bool evaluated = problem.Evaluate(eval, &cost, nullptr, nullptr, crs.get());
+    if (summing.valid())
+      summing.get();
+    if (!evaluated || !std::isfinite(cost)) {
       throw std::runtime_error(
           "covariance: the problem cannot be evaluated at the solution "
           "(non-finite residuals or Jacobians)");
     }
-    if (crs.num_cols != n + c)
+    if (crs->num_cols != n + c)
       throw std::logic_error("covariance: unexpected Jacobian width");
-    const SparseRowMajor J = ToEigen(crs);
-    H += SparseColMajor(SparseColMajor(J.transpose()) * J);
+    if (threads > 1)
+      summing = std::async(std::launch::async, [&accumulate, crs] { accumulate(*crs); });
+    else
+      accumulate(*crs);
   }
+  if (summing.valid())
+    summing.get();
   const Eigen::MatrixXd H_cc = Eigen::MatrixXd(H.bottomRightCorner(c, c));
   if (n == 0) {
     out.information = H_cc;

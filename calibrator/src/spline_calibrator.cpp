@@ -426,7 +426,8 @@ void FinishResult(
     }
   }
   // One Schur complement of the data; the priors (on calibration blocks only) add to it.
-  const MarginalInformation info_data = ComputeMarginalInformation(problem, calib, data_only);
+  const MarginalInformation info_data =
+      ComputeMarginalInformation(problem, calib, data_only, options.threads);
   MarginalInformation info = info_data;
   AddCalibrationInformation(problem, calib, prior_ids, &info);
   const CalibrationCovariance cov = InvertInformation(info);

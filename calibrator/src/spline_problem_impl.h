@@ -36,6 +36,7 @@ using residual_internal::Jacobian;
 #include "ctcal/spline/so3.h"
 #include "ctcal/spline/so3_manifold.h"
 #include "ctcal/targets/board.h"
+#include "parallel_for.h"
 #include "spline_trajectory_fit.h"
 
 namespace ctcal {
@@ -382,9 +383,11 @@ class SplineProblem {
   }
 
   void Finish(SplineCalibrationResult* out) {
-    std::vector<CornerResiduals> corners;
-    for (const PreparedCamera& cam : prep_.cameras) {
-      CornerResiduals c;
+    // Every corner on its own (the problem may hold them compressed), one camera per thread.
+    std::vector<CornerResiduals> corners(prep_.cameras.size());
+    ParallelFor(options_.threads, prep_.cameras.size(), [&](std::size_t k) {
+      const PreparedCamera& cam = prep_.cameras[k];
+      CornerResiduals& c = corners[k];
       c.camera = cam.state->name();
       for (std::size_t i = 0; i < cam.corners.size(); ++i) {
         Eigen::Vector2d e;
@@ -393,8 +396,7 @@ class SplineProblem {
         c.whitened.push_back(e);
         c.sigma_px.push_back(cam.corners[i].sigma_px);
       }
-      corners.push_back(std::move(c));
-    }
+    });
     FinishResult(*problem_, state_, prior_ids_, corners, inertial_ids_, options_, log_, out);
   }
 

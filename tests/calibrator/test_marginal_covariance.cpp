@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -192,6 +193,47 @@ TEST(MarginalCovariance, PriorInformationAddsToTheDataSchurComplement) {
   EXPECT_NEAR((sum.information - data_only)(1, 1), 25.0, 1e-12);  // 1 / 0.2^2
   // A "prior" on a nuisance block is refused.
   EXPECT_THROW(AddCalibrationInformation(problem, calib, data, &sum), std::logic_error);
+}
+
+// More residual blocks than one chunk of the accumulation (4096): the chunked J^T J equals the
+// dense one, and summing chunks on a second thread (threads = 2) gives the same bits.
+TEST(MarginalCovariance, ChunksOnTwoThreadsGiveTheSameInformation) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss;
+  // A chain of 420 nuisance blocks (3 each) with a shared 2-vector, 10 residuals per link.
+  constexpr int kBlocks = 420;
+  std::vector<std::array<double, 3>> x(kBlocks, {0.0, 0.0, 0.0});
+  double y[2] = {0.0, 0.0};
+  ceres::Problem problem;
+  const int dim = 3 * kBlocks + 2;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(dim, dim);
+  for (int k = 0; k + 1 < kBlocks; ++k) {
+    for (int m = 0; m < 10; ++m) {
+      Eigen::Matrix<double, 4, 8> A;
+      for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 8; ++j)
+          A(i, j) = gauss(rng);
+      }
+      const Eigen::Matrix<double, 8, 8> AtA = A.transpose() * A;
+      int col[8] = {3 * k, 3 * k + 1, 3 * k + 2, 3 * k + 3, 3 * k + 4, 3 * k + 5, dim - 2, dim - 1};
+      for (int i = 0; i < 8; ++i) {
+        for (int j = 0; j < 8; ++j)
+          H(col[i], col[j]) += AtA(i, j);
+      }
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LinearResidual, 4, 3, 3, 2>(
+                                   new LinearResidual(A, Eigen::Vector4d::Zero())),
+                               nullptr, x[static_cast<std::size_t>(k)].data(),
+                               x[static_cast<std::size_t>(k + 1)].data(), y);
+    }
+  }
+  ASSERT_GT(problem.NumResidualBlocks(), 4096);
+  const std::vector<CalibrationBlock> calib = {{y, {"y[0]", "y[1]"}, {1.0, 1.0}}};
+  const MarginalInformation serial = ComputeMarginalInformation(problem, calib, {}, 1);
+  const MarginalInformation parallel = ComputeMarginalInformation(problem, calib, {}, 2);
+  EXPECT_EQ(serial.information, parallel.information);
+  const Eigen::Matrix2d expected =
+      H.ldlt().solve(Eigen::MatrixXd::Identity(dim, dim)).bottomRightCorner<2, 2>().inverse();
+  EXPECT_LT((serial.information - expected).norm(), 1e-8 * expected.norm());
 }
 
 // A rotation measured directly with isotropic noise sigma (in the full-angle left perturbation)

@@ -45,9 +45,10 @@ struct MarginalInformation {
 // parameter values and marginalises every non-constant parameter block that is not in `calib`.
 // Calibration blocks that are constant in the problem are skipped (they are not estimated).
 // Throws std::runtime_error when the problem cannot be evaluated (non-finite residuals).
+// threads > 1: the Jacobian's chunks are evaluated and multiplied on two threads (same result).
 MarginalInformation ComputeMarginalInformation(
     ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
-    const std::vector<ceres::ResidualBlockId>& residual_blocks = {});
+    const std::vector<ceres::ResidualBlockId>& residual_blocks = {}, int threads = 1);
 
 // Adds J^T J of `residual_blocks` that depend on calibration blocks only (the priors) to
 // info->information. Since such terms touch H_cc alone, the Schur complement of data + priors is
