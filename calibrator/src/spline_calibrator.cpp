@@ -513,6 +513,8 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
           prep.knot_spacing_s));
 
   SplineCalibrationResult out;
+  out.init_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   using spline_internal::RunPipeline;
   const bool split = options.representation == Se3Representation::kSplit;
   switch (options.order) {

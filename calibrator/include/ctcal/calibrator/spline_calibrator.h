@@ -89,6 +89,7 @@ struct SplineCalibrationResult {
   double knot_spacing_s = 0.0;
   int num_knots = 0;
   int iterations = 0;
+  double init_seconds = 0.0;   // coarse-guess initialisation, board views and data selection
   double solve_seconds = 0.0;  // the Ceres solves
   double seconds_per_iteration = 0.0;
   double covariance_seconds = 0.0;
