@@ -583,23 +583,31 @@ def main():
         ld = cam.get("line_delay", 0.0)
         per_corner_sigma = ci == 0  # the first camera writes the optional sigma column
         lines, frames, n, cells = [], 0, 0, set()
+
+        def camera_pose(t):
+            """R_W_C, p_W_C at base time t."""
+            p, _, _, R, _, _ = body(t)
+            return mm(R, R_B_C), add(p, mv(R, t_B_C))
+
         for st in stamps(t0_ns + 25000000, args.duration - 0.05, args.cam_rate):
             t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
+            pose_at_stamp = camera_pose(t_img)
             frame = []
             for group in groups:
                 seen = []
                 for cid in group:
                     # SPEC 2: row v is read at t_S + v * line_delay; v depends on the pose at that
                     # time, so iterate (a contraction: line_delay * |dv/dt| << 1).
-                    v_row, uv = 0.5 * height, None
-                    for _ in range(6 if ld > 0.0 else 1):
-                        p, _, _, R, _, _ = body(t_img + v_row * ld)
-                        R_W_C = mm(R, R_B_C)
-                        p_W_C = add(p, mv(R, t_B_C))
-                        uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                    R_W_C, p_W_C = pose_at_stamp
+                    uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                    for _ in range(8 if ld > 0.0 else 0):
                         if uv is None:
                             break
                         v_row = uv[1]
+                        R_W_C, p_W_C = camera_pose(t_img + v_row * ld)
+                        uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                        if uv is not None and abs(uv[1] - v_row) < 1e-6:
+                            break
                     if uv is None or not (2.0 <= uv[0] <= width - 3.0 and
                                           2.0 <= uv[1] <= height - 3.0):
                         break
