@@ -6,6 +6,7 @@
 // sign, a distortion's parameter order, a CSV column's unit) passes every other test; here it
 // cannot.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
@@ -35,7 +36,8 @@ bool HavePython() {
 
 // Writes the dataset with `args` and calibrates it from its rig.yaml; returns the output folder.
 fs::path GenerateAndCalibrate(const std::string& stem, const std::string& args) {
-  const fs::path data = fs::path(::testing::TempDir()) / ("ctcal_indep_" + stem);
+  const fs::path data =
+      fs::path(::testing::TempDir()) / ("ctcal_indep_" + stem + "_" + std::to_string(::getpid()));
   const fs::path out = data.string() + "_out";
   fs::remove_all(data);
   fs::remove_all(out);
@@ -243,6 +245,10 @@ void CheckCalibration(const std::string& stem, const std::string& args) {
       "worst %.2f sigma (%s)\n",
       stem.c_str(), r.max_rotation_deg, r.max_translation_m * 1e3, r.max_time_offset_s * 1e3,
       r.max_focal_px, r.worst_sigmas, r.worst.c_str());
+  if (!::testing::Test::HasFailure()) {  // 20 MB per run; a failed run's files stay for a look
+    fs::remove_all(data);
+    fs::remove_all(data.string() + "_out");
+  }
 }
 
 // imu2 base with full g-sensitivity, imu2 auxiliary IMU, upper-triangular gyro, pinhole-radtan
