@@ -83,35 +83,88 @@ double AngleDeg(const Eigen::Matrix3d& R) {
   return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI;
 }
 
-// Kalibr's frame `i` of a scale-misaligned IMU, as the rotation R_I_i from the script's truth
-// (truth.yaml read here with yaml-cpp, not with ctcal's rig reader). Kalibr's accelerometer model
-// is a_m = M a_i + b with M lower-triangular: `i` has its x axis along the accelerometer's first
-// sensing axis and its y axis in the plane of the first two. SPEC's a_m = T_a R_a_I a_I gives those
-// axes in I as the rows of D_a^-1 R_a_I; Gram-Schmidt on them gives the columns of R_I_i.
-Eigen::Matrix3d KalibrImuFrame(const YAML::Node& imu) {
+// SPEC 3's stored matrices, read here with yaml-cpp (not with ctcal's rig reader): 6 numbers
+// upper-triangular column-wise, 9 row-major; `fallback` when the key is absent.
+Eigen::Matrix3d StoredMatrix(const YAML::Node& node, const Eigen::Matrix3d& fallback) {
+  if (!node)
+    return fallback;
+  const std::vector<double> d = node.as<std::vector<double>>();
+  Eigen::Matrix3d M;
+  if (d.size() == 9) {
+    M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.data());
+  } else {
+    M << d[0], d[1], d[3], 0.0, d[2], d[4], 0.0, 0.0, d[5];
+  }
+  return M;
+}
+
+Eigen::Matrix3d Rotation(const YAML::Node& rows) {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int r = 0; rows && r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      R(r, c) = rows[r][c].as<double>();
+  return R;
+}
+
+// A = L Q with L lower-triangular (positive diagonal) and Q a rotation: Gram-Schmidt on A's rows.
+Eigen::Matrix3d RowOrthonormalised(const Eigen::Matrix3d& A) {
+  Eigen::Matrix3d Q;
+  Q.row(0) = A.row(0).normalized();
+  Q.row(1) = (A.row(1) - A.row(1).dot(Q.row(0)) * Q.row(0)).normalized();
+  Q.row(2) = Q.row(0).cross(Q.row(1));
+  return Q;
+}
+
+// Kalibr's `scale-misalignment` IMU (kalibr_imu_camera_calibration/IccSensors.py):
+//   a_m = M_a a_i + b_a,   w_m = M_g C_gyro_i w_i + A C_gyro_i a_i + b_g
+// with M_a, M_g lower-triangular and i its own IMU frame. The truth's SPEC model (a_m = T_a R_a_I
+// a_I, w_m = T_w R_w_I w_I + T_g a_I) gives them with a_i = R_i_I a_I: T_a R_a_I = M_a R_i_I (so
+// R_i_I is the rotation of the row decomposition), T_w R_w_I R_I_i = M_g C_gyro_i (the same
+// decomposition again) and A = T_g R_I_i C_gyro_i^T.
+struct KalibrImu {
+  Eigen::Matrix3d R_I_i, M_a, M_g, C_gyro_i, A;
+};
+
+KalibrImu KalibrImuOfTruth(const YAML::Node& imu) {
   const std::string model = imu["model"] ? imu["model"].as<std::string>() : "imu2";
-  Eigen::Matrix3d D_a = Eigen::Matrix3d::Identity();
-  if (imu["Da"]) {
-    const std::vector<double> d = imu["Da"].as<std::vector<double>>();
-    if (d.size() == 9) {
-      D_a = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d.data());
-    } else {
-      D_a << d[0], d[1], d[3], 0.0, d[2], d[4], 0.0, 0.0, d[5];
-    }
-  }
-  Eigen::Matrix3d R_I_a = Eigen::Matrix3d::Identity();
-  if (model == "imu2" && imu["R_I_a"]) {
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        R_I_a(r, c) = imu["R_I_a"][r][c].as<double>();
-  }
-  const Eigen::Matrix3d axes = D_a.inverse() * R_I_a.transpose();  // rows: sensing axes in I
-  Eigen::Matrix3d R_I_i;
-  R_I_i.col(0) = axes.row(0).transpose().normalized();
-  const Eigen::Vector3d y = axes.row(1).transpose();
-  R_I_i.col(1) = (y - y.dot(R_I_i.col(0)) * R_I_i.col(0)).normalized();
-  R_I_i.col(2) = R_I_i.col(0).cross(R_I_i.col(1));
-  return R_I_i;
+  const Eigen::Matrix3d I3 = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d T_w = StoredMatrix(imu["Dw"], I3).inverse();
+  const Eigen::Matrix3d T_a = StoredMatrix(imu["Da"], I3).inverse();
+  const Eigen::Matrix3d T_g = StoredMatrix(imu["Tg"], Eigen::Matrix3d::Zero());
+  const Eigen::Matrix3d R_w_I = model == "imu1" ? Rotation(imu["R_I_w"]).transpose() : I3;
+  const Eigen::Matrix3d R_a_I = model == "imu2" ? Rotation(imu["R_I_a"]).transpose() : I3;
+  KalibrImu k;
+  const Eigen::Matrix3d accel = T_a * R_a_I;
+  k.R_I_i = RowOrthonormalised(accel).transpose();
+  k.M_a = accel * k.R_I_i;
+  const Eigen::Matrix3d gyro = T_w * R_w_I * k.R_I_i;
+  k.C_gyro_i = RowOrthonormalised(gyro);
+  k.M_g = gyro * k.C_gyro_i.transpose();
+  k.A = T_g * k.R_I_i * k.C_gyro_i.transpose();
+  return k;
+}
+
+Eigen::Matrix3d Matrix3(const YAML::Node& rows) {
+  return Rotation(rows);
+}
+
+// imu.yaml's intrinsics of one IMU against the truth's, in Kalibr's model. Tolerances: a few
+// sigma of the estimates (D entries ~5e-4, T_g ~3e-5, rotations ~0.03 deg); a transposed or
+// inverted matrix would be off by the truth's 1 % scale / 0.5 % misalignment.
+void ExpectKalibrIntrinsics(const YAML::Node& truth_imu, const YAML::Node& kalibr,
+                            const std::string& name) {
+  const KalibrImu k = KalibrImuOfTruth(truth_imu);
+  ASSERT_EQ(kalibr["model"].as<std::string>(), "scale-misalignment") << name;
+  const double err_Ma = (Matrix3(kalibr["accelerometers"]["M"]) - k.M_a).cwiseAbs().maxCoeff();
+  const double err_Mg = (Matrix3(kalibr["gyroscopes"]["M"]) - k.M_g).cwiseAbs().maxCoeff();
+  const double err_A = (Matrix3(kalibr["gyroscopes"]["A"]) - k.A).cwiseAbs().maxCoeff();
+  const double err_C = AngleDeg(Matrix3(kalibr["gyroscopes"]["C_gyro_i"]) * k.C_gyro_i.transpose());
+  std::printf("  %-20s M_a %.1e, M_g %.1e, A %.1e, C_gyro_i %.4f deg\n",
+              (name + " imu.yaml").c_str(), err_Ma, err_Mg, err_A, err_C);
+  EXPECT_LT(err_Ma, 3e-3) << name;
+  EXPECT_LT(err_Mg, 3e-3) << name;
+  EXPECT_LT(err_A, 2e-4) << name;
+  EXPECT_LT(err_C, 0.25) << name;
 }
 
 Eigen::Matrix4d Pose(const Eigen::Matrix3d& R) {
@@ -148,7 +201,7 @@ void ExpectSamePose(const Eigen::Matrix4d& T_file, const Eigen::Matrix4d& T_expe
 // 0.25 deg; a wrong frame would be off by the accelerometer's misalignment (0.6-1 deg here).
 void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, const fs::path& out) {
   const YAML::Node sensors = truth_yaml["sensors"];
-  const Eigen::Matrix4d T_B_b = Pose(KalibrImuFrame(sensors[truth.base_imu]));
+  const Eigen::Matrix4d T_B_b = Pose(KalibrImuOfTruth(sensors[truth.base_imu]).R_I_i);
   const YAML::Node chain = YAML::LoadFile((out / "camchain-imucam.yaml").string());
   std::map<std::string, std::string> name_of;  // cam0 -> sensor
   for (const auto& entry : chain)
@@ -174,10 +227,13 @@ void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, con
   const YAML::Node imus = YAML::LoadFile((out / "imu.yaml").string());
   for (const auto& entry : imus) {
     const std::string name = SensorOfTopic(truth, entry.second["rostopic"].as<std::string>());
-    if (name.empty() || name == truth.base_imu)
+    if (name.empty())
+      continue;
+    ExpectKalibrIntrinsics(sensors[name], entry.second, name);
+    if (name == truth.base_imu)
       continue;
     const SensorConfig& imu = *truth.Find(name);
-    const Eigen::Matrix4d T_S_i = Pose(KalibrImuFrame(sensors[name]));
+    const Eigen::Matrix4d T_S_i = Pose(KalibrImuOfTruth(sensors[name]).R_I_i);
     ExpectSamePose(Matrix4(entry.second["T_i_b"]), T_S_i.inverse() * imu.T_B_S.inverse() * T_B_b,
                    0.25, name + " T_i_b");
   }
