@@ -635,9 +635,12 @@ def main():
         stats[name] = (frames, n, len(cells))
 
     # ---- truth.yaml and the coarse guess rig.yaml
-    estimates = {BASE: ["intrinsics"], AUX: ["extrinsics", "time_offset", "intrinsics"],
-                 GYRO: (["time_offset", "intrinsics"] if args.gyro_model == "full" else
-                        ["extrinsics", "time_offset", "intrinsics"]),
+    # SPEC 3: a `none` model has no intrinsics to estimate; a `full` gyro's rotation is D_w's.
+    aux_intrinsics = [] if args.aux_model == "none" else ["intrinsics"]
+    gyro_intrinsics = [] if args.gyro_model == "none" else ["intrinsics"]
+    estimates = {BASE: ["intrinsics"], AUX: ["extrinsics", "time_offset"] + aux_intrinsics,
+                 GYRO: (["time_offset"] if args.gyro_model == "full" else
+                        ["extrinsics", "time_offset"]) + gyro_intrinsics,
                  CAM_L: ["intrinsics", "extrinsics", "time_offset"],
                  CAM_R: ["intrinsics", "extrinsics", "time_offset"] +
                  (["line_delay"] if args.rolling_shutter else [])}
