@@ -294,7 +294,7 @@ def inertial_matrices(s):
     if s["type"] == "gyro":
         Dw = upper_from6(s["Dw"]) if model == "upper" else (
             full_from9(s["Dw"]) if model == "full" else eye())
-        return mm(inv3(Dw), eye()), None, None
+        return inv3(Dw), None, None
     Dw = full_from9(s["Dw"]) if model == "imu3" else (
         eye() if model == "none" else upper_from6(s["Dw"]))
     Da = full_from9(s["Da"]) if model == "imu4" else (
@@ -341,8 +341,9 @@ def imu_truth(rng, model, noise, T_B_S=None, offset=None):
 
 
 # --------------------------------------------------------------------------------------------
-# Files. Our own layout choices where SPEC leaves them open: EuRoC-style headers, values in
-# %.10g / %.17g, block-style YAML with the keys in an order of our own.
+# Files. Our own layout choices where SPEC leaves them open: EuRoC-style CSV headers with units,
+# readings in %.10g, YAML numbers as Python's shortest round-trip repr, block-style YAML with the
+# keys in an order of our own.
 
 
 def fmt(x):
@@ -401,48 +402,35 @@ def stamps(t0_ns, duration, rate):
     return [t0_ns + k * period_ns for k in range(int(duration * rate) + 1)]
 
 
+def rotation_translation(T):
+    return [row[:3] for row in T[:3]], [row[3] for row in T[:3]]
+
+
+def body_state(traj, t):
+    p, v, acc = traj.position(t)
+    R, w, alpha = traj.rotation(t)
+    return p, v, acc, R, w, alpha
+
+
 # --------------------------------------------------------------------------------------------
+# The rig: the truth of every sensor, in the order the files list them (not ours: cameras first,
+# the base last).
+
+BASE, AUX, GYRO, CAM_L, CAM_R = "body", "aux_imu", "fog", "left", "right"
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--duration", type=float, default=18.0)
-    ap.add_argument("--aux-model", default="imu2", choices=["none", "imu1", "imu2", "imu3", "imu4"])
-    ap.add_argument("--gyro-model", default="upper", choices=["none", "upper", "full"])
-    ap.add_argument("--target", default="aprilgrid", choices=["aprilgrid", "checkerboard"])
-    ap.add_argument("--rolling-shutter", action="store_true",
-                    help="the second camera reads its rows 25 us apart")
-    ap.add_argument("--max-offset-ms", type=float, default=10.0)
-    ap.add_argument("--cam-rate", type=float, default=20.0)
-    args = ap.parse_args()
-    wall = time.time()
-    rng = random.Random(args.seed)
-    out = args.out
-    os.makedirs(out, exist_ok=True)
+def make_target(kind):
+    """Kalibr's target description, corner id -> position, and the corner groups a detector
+    finds whole."""
+    if kind == "aprilgrid":
+        return ({"target_type": "aprilgrid", "tagCols": 7, "tagRows": 5, "tagSize": 0.06,
+                 "tagSpacing": 0.25},) + aprilgrid(7, 5, 0.06, 0.25)
+    return ({"target_type": "checkerboard", "targetCols": 7, "targetRows": 6,
+             "rowSpacingMeters": 0.07, "colSpacingMeters": 0.06},) + checkerboard(7, 6, 0.07, 0.06)
 
-    # Names of our own (SPEC: a folder's name is the sensor's name).
-    BASE, AUX, GYRO, CAM_L, CAM_R = "body", "aux_imu", "fog", "left", "right"
-    t0_ns = 1700000000123456789  # unix-epoch-like stamps, as real recordings have
-    g_mag = 9.80665
 
-    if args.target == "aprilgrid":
-        target = {"target_type": "aprilgrid", "tagCols": 7, "tagRows": 5, "tagSize": 0.06,
-                  "tagSpacing": 0.25}
-        points, groups = aprilgrid(7, 5, 0.06, 0.25)
-    else:
-        target = {"target_type": "checkerboard", "targetCols": 7, "targetRows": 6,
-                  "rowSpacingMeters": 0.07, "colSpacingMeters": 0.06}
-        points, groups = checkerboard(7, 6, 0.07, 0.06)
-    xs = [p[0] for p in points.values()]
-    ys = [p[1] for p in points.values()]
-    centre = [0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)), 0.0]
-
-    # The board hangs on a tilted wall: gravity mostly along the board's +y (its rows go down).
-    gdir = [rng.uniform(-0.2, 0.2), 1.0, rng.uniform(-0.3, 0.3)]
-    g_W = scale(g_mag / norm(gdir), gdir)
-
+def make_rig(rng, args):
+    """The sensors' truth and the left camera's pose R_B_L, t_B_L."""
     # Cameras: the left one looks along B's x axis (x_C = -y_B, y_C = -z_B); the right one, a
     # fisheye 11 cm to its right, looks 35 deg further right, so that the board sweeps its outer
     # field (Kannala-Brandt's k2..k4 are determined only by corners far off the axis).
@@ -454,23 +442,24 @@ def main():
     def offset(sign):
         return sign * args.max_offset_ms * 1e-3 * rng.uniform(0.35, 1.0)
 
-    cams = {
-        CAM_L: {"type": "camera", "camera_model": "pinhole", "resolution": [640, 480],
-                "intrinsics": [412.0 + rng.uniform(-5, 5), 414.0 + rng.uniform(-5, 5),
-                               322.5 + rng.uniform(-4, 4), 236.0 + rng.uniform(-4, 4)],
-                "distortion_model": "radtan",
-                "distortion_coeffs": [-0.28 + rng.uniform(-0.02, 0.02), 0.075, 2.1e-4, -1.4e-4],
-                "T_B_S": transform(R_B_L, t_B_L), "time_offset": offset(1.0),
-                "noise": {"pixel_sigma": 0.5}},
-        CAM_R: {"type": "camera", "camera_model": "pinhole", "resolution": [640, 512],
-                "intrinsics": [215.0 + rng.uniform(-5, 5), 214.0 + rng.uniform(-5, 5),
-                               322.0 + rng.uniform(-4, 4), 258.0 + rng.uniform(-4, 4)],
-                "distortion_model": "equidistant",
-                "distortion_coeffs": [-0.012 + rng.uniform(-0.003, 0.003), 0.021, -0.018, 0.0045],
-                "T_B_S": transform(R_B_R, t_B_R), "time_offset": offset(-1.0),
-                "line_delay": 25e-6 if args.rolling_shutter else 0.0,
-                "noise": {"pixel_sigma": 0.5}},
-    }
+    left = {"type": "camera", "camera_model": "pinhole", "resolution": [640, 480],
+            "intrinsics": [412.0 + rng.uniform(-5, 5), 414.0 + rng.uniform(-5, 5),
+                           322.5 + rng.uniform(-4, 4), 236.0 + rng.uniform(-4, 4)],
+            "distortion_model": "radtan",
+            "distortion_coeffs": [-0.28 + rng.uniform(-0.02, 0.02), 0.075, 2.1e-4, -1.4e-4],
+            "T_B_S": transform(R_B_L, t_B_L), "time_offset": offset(1.0),
+            "noise": {"pixel_sigma": 0.5},
+            "estimate": ["intrinsics", "extrinsics", "time_offset"]}
+    right = {"type": "camera", "camera_model": "pinhole", "resolution": [640, 512],
+             "intrinsics": [215.0 + rng.uniform(-5, 5), 214.0 + rng.uniform(-5, 5),
+                            322.0 + rng.uniform(-4, 4), 258.0 + rng.uniform(-4, 4)],
+             "distortion_model": "equidistant",
+             "distortion_coeffs": [-0.012 + rng.uniform(-0.003, 0.003), 0.021, -0.018, 0.0045],
+             "T_B_S": transform(R_B_R, t_B_R), "time_offset": offset(-1.0),
+             "line_delay": 25e-6 if args.rolling_shutter else 0.0,
+             "noise": {"pixel_sigma": 0.5},
+             "estimate": ["intrinsics", "extrinsics", "time_offset"] +
+             (["line_delay"] if args.rolling_shutter else [])}
     imu_noise = {"update_rate": 200.0, "gyroscope_noise_density": 1.6e-4,
                  "gyroscope_random_walk": 2.0e-6, "accelerometer_noise_density": 2.0e-3,
                  "accelerometer_random_walk": 3.0e-5}
@@ -480,176 +469,157 @@ def main():
     gyro_noise = {"update_rate": 400.0, "gyroscope_noise_density": 5.0e-5,
                   "gyroscope_random_walk": 1.0e-6}
     base = imu_truth(rng, "imu2", imu_noise)
+    base["estimate"] = ["intrinsics"]
     aux = imu_truth(rng, args.aux_model, aux_noise,
                     transform(mm(rot_z(math.radians(90.0)), random_rotation(rng, 5.0)),
                               [-0.04, 0.06 + rng.uniform(-0.01, 0.01), 0.02]), offset(-1.0))
+    # SPEC 3: a `none` model has no intrinsics to estimate.
+    aux["estimate"] = ["extrinsics", "time_offset"] + (
+        [] if args.aux_model == "none" else ["intrinsics"])
     gyro = {"type": "gyro", "model": args.gyro_model, "noise": gyro_noise,
             "T_B_S": transform(mm(rot_x(math.radians(180.0)), random_rotation(rng, 4.0)),
                                [0.02, -0.05, 0.01]), "time_offset": offset(1.0)}
     if args.gyro_model == "upper":
         gyro["Dw"] = random_upper6(rng, 0.01, 0.005)
     elif args.gyro_model == "full":
-        # Its frame is the one D_w fixes: keep T_B_S's rotation, since the rotation is not
-        # estimated; D_w carries scale and misalignment only.
+        # Its frame is the one D_w fixes and its rotation may not be estimated (SPEC 3): T_B_S
+        # keeps the mounting rotation, D_w carries scale and misalignment only.
         gyro["Dw"] = random_full9(rng, 0.01, 0.005)
+    gyro["estimate"] = (["time_offset"] if args.gyro_model == "full" else
+                        ["extrinsics", "time_offset"]) + (
+        [] if args.gyro_model == "none" else ["intrinsics"])
+    return {CAM_R: right, GYRO: gyro, CAM_L: left, AUX: aux, BASE: base}, R_B_L, t_B_L
 
-    # The motion: the left camera looks at the board's centre from 0.75 m in front (the board's
-    # -z side, so that the board's x and y read as the image's u and v).
-    R_W_L0 = eye()
-    p_W_L0 = [centre[0], centre[1], -0.75]
-    R_W_B0 = mm(R_W_L0, tr(R_B_L))
-    p_W_B0 = sub(p_W_L0, mv(R_W_B0, t_B_L))
-    traj = Trajectory(rng, p_W_B0, R_W_B0, pos_amp=0.22, rot_amp=0.45)
-    self_check(traj)
 
-    def body(t):
-        p, v, acc = traj.position(t)
-        R, w, alpha = traj.rotation(t)
-        return p, v, acc, R, w, alpha
+# --------------------------------------------------------------------------------------------
+# The recordings.
 
-    # ---- inertial data
-    def inertial(name, s, rate, with_accel):
-        os.makedirs(os.path.join(out, name), exist_ok=True)
-        Mw, Ma, Tg = inertial_matrices(s)
-        nz = s["noise"]
-        R_B_S = [row[:3] for row in s["T_B_S"][:3]] if "T_B_S" in s else eye()
-        t_B_S = [row[3] for row in s["T_B_S"][:3]] if "T_B_S" in s else [0.0, 0.0, 0.0]
-        off = s.get("time_offset", 0.0)
-        dt = 1.0 / rate
-        # SPEC 3 (Kalibr's densities): a sample's white noise has sigma density * sqrt(rate); a
-        # bias walks by random_walk * sqrt(dt) per step.
-        sg = nz["gyroscope_noise_density"] * math.sqrt(rate)
-        sbg = nz["gyroscope_random_walk"] * math.sqrt(dt)
-        bg = gauss3(rng, 0.01)
+
+def write_inertial(out, name, s, traj, g_W, t0_ns, duration, rng, groundtruth):
+    """DATA/<name>/data.csv and biases.csv (and, with `groundtruth`, DATA/groundtruth/data.csv)
+    of an imu or gyro sensor `s`."""
+    with_accel = s["type"] == "imu"
+    rate = s["noise"]["update_rate"]
+    os.makedirs(os.path.join(out, name), exist_ok=True)
+    Mw, Ma, Tg = inertial_matrices(s)
+    nz = s["noise"]
+    R_B_S, t_B_S = rotation_translation(s["T_B_S"]) if "T_B_S" in s else (eye(), [0.0] * 3)
+    off = s.get("time_offset", 0.0)
+    dt = 1.0 / rate
+    # SPEC 3 (Kalibr's densities): a sample's white noise has sigma density * sqrt(rate); a bias
+    # walks by random_walk * sqrt(dt) per step.
+    sg = nz["gyroscope_noise_density"] * math.sqrt(rate)
+    sbg = nz["gyroscope_random_walk"] * math.sqrt(dt)
+    bg = gauss3(rng, 0.01)
+    ba = []
+    if with_accel:
+        sa = nz["accelerometer_noise_density"] * math.sqrt(rate)
+        sba = nz["accelerometer_random_walk"] * math.sqrt(dt)
+        ba = gauss3(rng, 0.08)
+    rows, brows, gt = [], [], []
+    for st in stamps(t0_ns, duration, rate):
+        t = (st - t0_ns) * 1e-9 + off  # SPEC 2: taken at base time t_S + time_offset
+        p, v, acc, R, w_B, alpha_B = body_state(traj, t)
+        w_S = mtv(R_B_S, w_B)
+        # Specific force at the sensor's origin p_W_B + R_W_B t_B_S, in the sensor's frame:
+        # a_S = R_B_S^T (R_W_B^T (acc_W - g_W) + alpha_B x t_B_S + w_B x (w_B x t_B_S)).
+        f_B = add(mtv(R, sub(acc, g_W)),
+                  add(cross(alpha_B, t_B_S), cross(w_B, cross(w_B, t_B_S))))
+        a_S = mtv(R_B_S, f_B)
+        reading = add(add(mv(Mw, w_S), bg), gauss3(rng, sg))
         if with_accel:
-            sa = nz["accelerometer_noise_density"] * math.sqrt(rate)
-            sba = nz["accelerometer_random_walk"] * math.sqrt(dt)
-            ba = gauss3(rng, 0.08)
-        rows, brows, gt = [], [], []
-        for st in stamps(t0_ns, args.duration, rate):
-            t = (st - t0_ns) * 1e-9 + off  # SPEC 2: taken at base time t_S + time_offset
-            p, v, acc, R, w_B, alpha_B = body(t)
-            w_S = mtv(R_B_S, w_B)
-            # Specific force at the sensor's origin p_W_B + R_W_B t_B_S, in the sensor's frame:
-            # a_S = R_B_S^T (R_W_B^T (acc_W - g_W) + alpha_B x t_B_S + w_B x (w_B x t_B_S)).
-            f_B = add(mtv(R, sub(acc, g_W)),
-                      add(cross(alpha_B, t_B_S), cross(w_B, cross(w_B, t_B_S))))
-            a_S = mtv(R_B_S, f_B)
-            wm = add(add(mv(Mw, w_S), bg), gauss3(rng, sg))
-            if with_accel:
-                wm = add(wm, mv(Tg, a_S))
-                am = add(add(mv(Ma, a_S), ba), gauss3(rng, sa))
-                rows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in wm + am)))
-                brows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in bg + ba)))
-            else:
-                rows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in wm)))
-                brows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in bg)))
-            if name == BASE:
-                q = quat_wxyz(R)
-                gt.append("%d,%s\n" % (st, ",".join("%.12g" % x for x in p + q + v + bg + ba)))
-            bg = add(bg, gauss3(rng, sbg))
-            if with_accel:
-                ba = add(ba, gauss3(rng, sba))
-        with open(os.path.join(out, name, "data.csv"), "w") as f:
-            if with_accel:
-                f.write("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],"
-                        "w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],"
-                        "a_RS_S_z [m s^-2]\n")
-            else:
-                f.write("#timestamp [ns],w_x [rad/s],w_y [rad/s],w_z [rad/s]\n")
-            f.writelines(rows)
-        with open(os.path.join(out, name, "biases.csv"), "w") as f:
-            f.write("#timestamp [ns],bw_x,bw_y,bw_z" + (",ba_x,ba_y,ba_z\n" if with_accel else "\n"))
-            f.writelines(brows)
-        if gt:
-            os.makedirs(os.path.join(out, "groundtruth"), exist_ok=True)
-            with open(os.path.join(out, "groundtruth", "data.csv"), "w") as f:
-                f.write("#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z,"
-                        "bw_x,bw_y,bw_z,ba_x,ba_y,ba_z\n")
-                f.writelines(gt)
+            reading = add(reading, mv(Tg, a_S)) + add(add(mv(Ma, a_S), ba), gauss3(rng, sa))
+        rows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in reading)))
+        brows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in bg + ba)))
+        if groundtruth:
+            q = quat_wxyz(R)
+            gt.append("%d,%s\n" % (st, ",".join("%.12g" % x for x in p + q + v + bg + ba)))
+        bg = add(bg, gauss3(rng, sbg))
+        if with_accel:
+            ba = add(ba, gauss3(rng, sba))
+    with open(os.path.join(out, name, "data.csv"), "w") as f:
+        if with_accel:
+            f.write("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],"
+                    "w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],"
+                    "a_RS_S_z [m s^-2]\n")
+        else:
+            f.write("#timestamp [ns],w_x [rad/s],w_y [rad/s],w_z [rad/s]\n")
+        f.writelines(rows)
+    with open(os.path.join(out, name, "biases.csv"), "w") as f:
+        f.write("#timestamp [ns],bw_x,bw_y,bw_z" + (",ba_x,ba_y,ba_z\n" if with_accel else "\n"))
+        f.writelines(brows)
+    if groundtruth:
+        os.makedirs(os.path.join(out, "groundtruth"), exist_ok=True)
+        with open(os.path.join(out, "groundtruth", "data.csv"), "w") as f:
+            f.write("#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z,"
+                    "bw_x,bw_y,bw_z,ba_x,ba_y,ba_z\n")
+            f.writelines(gt)
 
-    inertial(BASE, base, imu_noise["update_rate"], True)
-    if args.aux_model is not None:
-        inertial(AUX, aux, aux_noise["update_rate"], True)
-    inertial(GYRO, gyro, gyro_noise["update_rate"], False)
 
-    # ---- corners
-    stats = {}
-    for ci, (name, cam) in enumerate(cams.items()):
-        os.makedirs(os.path.join(out, name), exist_ok=True)
-        R_B_C = [row[:3] for row in cam["T_B_S"][:3]]
-        t_B_C = [row[3] for row in cam["T_B_S"][:3]]
-        width, height = cam["resolution"]
-        ld = cam.get("line_delay", 0.0)
-        per_corner_sigma = ci == 0  # the first camera writes the optional sigma column
-        lines, frames, n, cells = [], 0, 0, set()
+def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, rng,
+                  per_corner_sigma):
+    """DATA/<name>/corners.csv; returns (frames, corners, image cells of a 4x4 grid covered)."""
+    os.makedirs(os.path.join(out, name), exist_ok=True)
+    R_B_C, t_B_C = rotation_translation(cam["T_B_S"])
+    width, height = cam["resolution"]
+    ld = cam.get("line_delay", 0.0)
+    lines, frames, n, cells = [], 0, 0, set()
 
-        def camera_pose(t):
-            """R_W_C, p_W_C at base time t."""
-            p, _, _, R, _, _ = body(t)
-            return mm(R, R_B_C), add(p, mv(R, t_B_C))
+    def camera_pose(t):
+        """R_W_C, p_W_C at base time t."""
+        p, _, _, R, _, _ = body_state(traj, t)
+        return mm(R, R_B_C), add(p, mv(R, t_B_C))
 
-        for st in stamps(t0_ns + 25000000, args.duration - 0.05, args.cam_rate):
-            t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
-            pose_at_stamp = camera_pose(t_img)
-            frame = []
-            for group in groups:
-                seen = []
-                for cid in group:
-                    # SPEC 2: row v is read at t_S + v * line_delay; v depends on the pose at that
-                    # time, so iterate (a contraction: line_delay * |dv/dt| << 1).
-                    R_W_C, p_W_C = pose_at_stamp
-                    uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
-                    for _ in range(8 if ld > 0.0 else 0):
-                        if uv is None:
-                            break
-                        v_row = uv[1]
-                        R_W_C, p_W_C = camera_pose(t_img + v_row * ld)
-                        uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
-                        if uv is not None and abs(uv[1] - v_row) < 1e-6:
-                            break
-                    if uv is None or not (2.0 <= uv[0] <= width - 3.0 and
-                                          2.0 <= uv[1] <= height - 3.0):
+    for st in stamps(t0_ns + 25000000, duration - 0.05, rate):
+        t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
+        pose_at_stamp = camera_pose(t_img)
+        frame = []
+        for group in groups:
+            seen = []
+            for cid in group:
+                # SPEC 2: row v is read at t_S + v * line_delay; v depends on the pose at that
+                # time, so iterate (a contraction: line_delay * |dv/dt| << 1).
+                R_W_C, p_W_C = pose_at_stamp
+                uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                for _ in range(8 if ld > 0.0 else 0):
+                    if uv is None:
                         break
-                    seen.append((cid, uv))
-                if len(seen) == len(group):
-                    frame += seen
-            if len(frame) < 8:
-                continue
-            frames += 1
-            n += len(frame)
-            for cid, (u, v) in frame:
-                cells.add((int(4 * u / width), int(4 * v / height)))
-                if per_corner_sigma:
-                    s = rng.choice([0.3, 0.5, 0.8])
-                    lines.append("%d,%d,%.4f,%.4f,%.2f\n" % (st, cid, u + rng.gauss(0.0, s),
-                                                             v + rng.gauss(0.0, s), s))
-                else:
-                    s = cam["noise"]["pixel_sigma"]
-                    lines.append("%d,%d,%.4f,%.4f\n" % (st, cid, u + rng.gauss(0.0, s),
-                                                        v + rng.gauss(0.0, s)))
-        with open(os.path.join(out, name, "corners.csv"), "w") as f:
-            f.write("#timestamp [ns],corner_id,u [px],v [px]" +
-                    (",sigma [px]\n" if per_corner_sigma else "\n"))
-            f.writelines(lines)
-        stats[name] = (frames, n, len(cells))
+                    v_row = uv[1]
+                    R_W_C, p_W_C = camera_pose(t_img + v_row * ld)
+                    uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                    if uv is not None and abs(uv[1] - v_row) < 1e-6:
+                        break
+                if uv is None or not (2.0 <= uv[0] <= width - 3.0 and
+                                      2.0 <= uv[1] <= height - 3.0):
+                    break
+                seen.append((cid, uv))
+            if len(seen) == len(group):
+                frame += seen
+        if len(frame) < 8:
+            continue
+        frames += 1
+        n += len(frame)
+        for cid, (u, v) in frame:
+            cells.add((int(4 * u / width), int(4 * v / height)))
+            if per_corner_sigma:
+                s = rng.choice([0.3, 0.5, 0.8])
+                lines.append("%d,%d,%.4f,%.4f,%.2f\n" % (st, cid, u + rng.gauss(0.0, s),
+                                                         v + rng.gauss(0.0, s), s))
+            else:
+                s = cam["noise"]["pixel_sigma"]
+                lines.append("%d,%d,%.4f,%.4f\n" % (st, cid, u + rng.gauss(0.0, s),
+                                                    v + rng.gauss(0.0, s)))
+    with open(os.path.join(out, name, "corners.csv"), "w") as f:
+        f.write("#timestamp [ns],corner_id,u [px],v [px]" +
+                (",sigma [px]\n" if per_corner_sigma else "\n"))
+        f.writelines(lines)
+    return frames, n, len(cells)
 
-    # ---- truth.yaml and the coarse guess rig.yaml
-    # SPEC 3: a `none` model has no intrinsics to estimate; a `full` gyro's rotation is D_w's.
-    aux_intrinsics = [] if args.aux_model == "none" else ["intrinsics"]
-    gyro_intrinsics = [] if args.gyro_model == "none" else ["intrinsics"]
-    estimates = {BASE: ["intrinsics"], AUX: ["extrinsics", "time_offset"] + aux_intrinsics,
-                 GYRO: (["time_offset"] if args.gyro_model == "full" else
-                        ["extrinsics", "time_offset"]) + gyro_intrinsics,
-                 CAM_L: ["intrinsics", "extrinsics", "time_offset"],
-                 CAM_R: ["intrinsics", "extrinsics", "time_offset"] +
-                 (["line_delay"] if args.rolling_shutter else [])}
-    truth = {CAM_R: cams[CAM_R], GYRO: gyro, CAM_L: cams[CAM_L], AUX: aux, BASE: base}
-    for name, s in truth.items():
-        s["estimate"] = estimates[name]
-    write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
-              BASE, g_mag, target, truth, gravity_W=g_W)
 
+def coarse_guess(truth, rng):
+    """A hand-made guess: focal lengths 3-5 % off with fu = fv and the image centre, no
+    distortion, rotations 2.4-4 deg and lever arms 1-3 cm per axis off, offsets 0, IMU intrinsics
+    left to their defaults."""
     guess = {}
     for name, s in truth.items():
         s = dict(s)
@@ -665,16 +635,67 @@ def main():
             for key in ("Dw", "Da", "Tg", "R_I_a", "R_I_w"):
                 s.pop(key, None)  # defaults: identity / zero
         if "T_B_S" in s:
-            R = [row[:3] for row in s["T_B_S"][:3]]
-            t = [row[3] for row in s["T_B_S"][:3]]
+            R, t = rotation_translation(s["T_B_S"])
             if not (s["type"] == "gyro" and s["model"] == "full"):
                 R = mm(random_rotation(rng, 4.0), R)
                 t = add(t, [rng.choice([-1.0, 1.0]) * rng.uniform(0.01, 0.03) for _ in range(3)])
             s["T_B_S"] = transform(R, t)
             s["time_offset"] = 0.0
         guess[name] = s
+    return guess
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--duration", type=float, default=18.0)
+    ap.add_argument("--aux-model", default="imu2", choices=["none", "imu1", "imu2", "imu3", "imu4"])
+    ap.add_argument("--gyro-model", default="upper", choices=["none", "upper", "full"])
+    ap.add_argument("--target", default="aprilgrid", choices=["aprilgrid", "checkerboard"])
+    ap.add_argument("--rolling-shutter", action="store_true",
+                    help="the fisheye reads its rows 25 us apart")
+    ap.add_argument("--max-offset-ms", type=float, default=10.0)
+    ap.add_argument("--cam-rate", type=float, default=20.0)
+    args = ap.parse_args()
+    wall = time.time()
+    rng = random.Random(args.seed)
+    out = args.out
+    os.makedirs(out, exist_ok=True)
+    t0_ns = 1700000000123456789  # unix-epoch-like stamps, as real recordings have
+    g_mag = 9.80665
+
+    target, points, groups = make_target(args.target)
+    xs = [p[0] for p in points.values()]
+    ys = [p[1] for p in points.values()]
+    centre = [0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)), 0.0]
+    # The board hangs on a tilted wall: gravity mostly along the board's +y (its rows go down).
+    gdir = [rng.uniform(-0.2, 0.2), 1.0, rng.uniform(-0.3, 0.3)]
+    g_W = scale(g_mag / norm(gdir), gdir)
+    truth, R_B_L, t_B_L = make_rig(rng, args)
+
+    # The motion: the left camera looks at the board's centre from 0.75 m in front (the board's
+    # -z side, so that the board's x and y read as the image's u and v).
+    R_W_B0 = tr(R_B_L)
+    p_W_B0 = sub([centre[0], centre[1], -0.75], mv(R_W_B0, t_B_L))
+    traj = Trajectory(rng, p_W_B0, R_W_B0, pos_amp=0.22, rot_amp=0.45)
+    self_check(traj)
+
+    for name in (BASE, AUX, GYRO):
+        write_inertial(out, name, truth[name], traj, g_W, t0_ns, args.duration, rng,
+                       groundtruth=name == BASE)
+    stats = {}
+    for name in (CAM_L, CAM_R):  # the left camera writes the optional sigma column
+        stats[name] = write_corners(out, name, truth[name], traj, points, groups, t0_ns,
+                                    args.duration, args.cam_rate, rng, name == CAM_L)
+
+    write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
+              BASE, g_mag, target, truth, gravity_W=g_W)
     write_rig(os.path.join(out, "rig.yaml"), "coarse hand-made guess written by scripts/spec_sim.py",
-              BASE, g_mag, target, guess)
+              BASE, g_mag, target, coarse_guess(truth, rng))
 
     print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s; %s; %.1f s" % (
         out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
