@@ -694,14 +694,15 @@ def main():
 
     write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
               BASE, g_mag, target, truth, gravity_W=g_W)
-    write_rig(os.path.join(out, "rig.yaml"), "coarse hand-made guess written by scripts/spec_sim.py",
-              BASE, g_mag, target, coarse_guess(truth, rng))
+    write_rig(os.path.join(out, "rig.yaml"),
+              "coarse hand-made guess written by scripts/spec_sim.py", BASE, g_mag, target,
+              coarse_guess(truth, rng))
 
+    cameras = ", ".join("%s %d frames %d corners %d/16 image cells" % ((k,) + v)
+                        for k, v in stats.items())
     print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s; %s; %.1f s" % (
         out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
-        ", rolling shutter" if args.rolling_shutter else "",
-        ", ".join("%s %d frames %d corners %d/16 image cells" % ((k,) + v) for k, v in stats.items()),
-        time.time() - wall))
+        ", rolling shutter" if args.rolling_shutter else "", cameras, time.time() - wall))
     return 0
 
 
