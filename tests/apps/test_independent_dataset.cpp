@@ -34,7 +34,7 @@ bool HavePython() {
   return std::system("python3 -c 'import math' > /dev/null 2>&1") == 0;
 }
 
-// Writes the dataset with `args` and calibrates it from its rig.yaml; returns the output folder.
+// Writes the dataset with `args` and calibrates it from its rig.yaml into DATA_out; returns DATA.
 fs::path GenerateAndCalibrate(const std::string& stem, const std::string& args) {
   const fs::path data =
       fs::path(::testing::TempDir()) / ("ctcal_indep_" + stem + "_" + std::to_string(::getpid()));
@@ -53,7 +53,7 @@ fs::path GenerateAndCalibrate(const std::string& stem, const std::string& args) 
 }
 
 // The guess really is coarse (the script's contract): every camera's focal length 3-5 % off with
-// no distortion, every offset 0, the base's intrinsics at their defaults.
+// no distortion, every offset 0.
 void ExpectCoarseGuess(const RigConfig& truth, const RigConfig& guess) {
   for (const SensorConfig& t : truth.sensors) {
     const SensorConfig* g = guess.Find(t.name);
@@ -98,12 +98,13 @@ Eigen::Matrix3d StoredMatrix(const YAML::Node& node, const Eigen::Matrix3d& fall
   return M;
 }
 
-Eigen::Matrix3d Rotation(const YAML::Node& rows) {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+// A 3x3 matrix as a list of rows; identity when the key is absent.
+Eigen::Matrix3d Matrix3(const YAML::Node& rows) {
+  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
   for (int r = 0; rows && r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      R(r, c) = rows[r][c].as<double>();
-  return R;
+      M(r, c) = rows[r][c].as<double>();
+  return M;
 }
 
 // A = L Q with L lower-triangular (positive diagonal) and Q a rotation: Gram-Schmidt on A's rows.
@@ -131,8 +132,8 @@ KalibrImu KalibrImuOfTruth(const YAML::Node& imu) {
   const Eigen::Matrix3d T_w = StoredMatrix(imu["Dw"], I3).inverse();
   const Eigen::Matrix3d T_a = StoredMatrix(imu["Da"], I3).inverse();
   const Eigen::Matrix3d T_g = StoredMatrix(imu["Tg"], Eigen::Matrix3d::Zero());
-  const Eigen::Matrix3d R_w_I = model == "imu1" ? Rotation(imu["R_I_w"]).transpose() : I3;
-  const Eigen::Matrix3d R_a_I = model == "imu2" ? Rotation(imu["R_I_a"]).transpose() : I3;
+  const Eigen::Matrix3d R_w_I = model == "imu1" ? Matrix3(imu["R_I_w"]).transpose() : I3;
+  const Eigen::Matrix3d R_a_I = model == "imu2" ? Matrix3(imu["R_I_a"]).transpose() : I3;
   KalibrImu k;
   const Eigen::Matrix3d accel = T_a * R_a_I;
   k.R_I_i = RowOrthonormalised(accel).transpose();
@@ -142,10 +143,6 @@ KalibrImu KalibrImuOfTruth(const YAML::Node& imu) {
   k.M_g = gyro * k.C_gyro_i.transpose();
   k.A = T_g * k.R_I_i * k.C_gyro_i.transpose();
   return k;
-}
-
-Eigen::Matrix3d Matrix3(const YAML::Node& rows) {
-  return Rotation(rows);
 }
 
 // imu.yaml's intrinsics of one IMU against the truth's, in Kalibr's model. Tolerances: a few
