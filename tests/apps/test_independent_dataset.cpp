@@ -192,7 +192,8 @@ void ExpectSamePose(const Eigen::Matrix4d& T_file, const Eigen::Matrix4d& T_expe
 // The Kalibr files (SPEC 1, 2, 7 name them; docs/files.md "Kalibr files" fixes the frames),
 // checked against the script's truth, not against ctcal's result: T_cam_imu = inverse(T_B_C) T_B_b
 // with b Kalibr's frame of the base IMU, timeshift_cam_imu = time_offset (t_imu = t_cam + shift),
-// T_cn_cnm1 = T_Cn_B T_B_Cn-1, and an auxiliary IMU's T_i_b = T_i_S inverse(T_B_S) T_B_b.
+// T_cn_cnm1 = T_Cn_B T_B_Cn-1, and an auxiliary IMU's T_i_b = T_i_S inverse(T_B_S) T_B_b and
+// time_offset.
 // A transform through Kalibr's IMU frames adds the errors of the IMUs' estimated internal axes
 // (R_I_a, D_a: 0.05-0.06 deg in this rig, within their sigma) to the extrinsic's, so it gets
 // 0.25 deg; a wrong frame would be off by the accelerometer's misalignment (0.6-1 deg here).
@@ -233,6 +234,8 @@ void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, con
     const Eigen::Matrix4d T_S_i = Pose(KalibrImuOfTruth(sensors[name]).R_I_i);
     ExpectSamePose(Matrix4(entry.second["T_i_b"]), T_S_i.inverse() * imu.T_B_S.inverse() * T_B_b,
                    0.25, name + " T_i_b");
+    // Kalibr's IMU offset: t_ref = t_imu + timeOffset (IccSensors.py), SPEC's sign.
+    EXPECT_NEAR(entry.second["time_offset"].as<double>(), imu.time_offset, 0.5e-3) << name;
   }
 }
 
