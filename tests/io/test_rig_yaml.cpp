@@ -343,6 +343,65 @@ TEST(RigYaml, SigmaReadsInfAndNanAsYamlWritesThem) {
   EXPECT_NE(out.find(".nan"), std::string::npos);
 }
 
+// SPEC section 2: "Timestamps in files are integer nanoseconds", so a motion window's t0 / t1
+// are written as integers (base clock) and a number with a fraction is refused. (In memory they
+// are seconds, which resolve 0.24 us at unix-epoch stamps; the values here are exact.)
+TEST(RigYaml, MotionWindowsAreIntegerNanosecondsInFiles) {
+  RigConfig rig = RandomResult(1);
+  rig.observability->motion = {
+      {"one_axis_rotation", "imu0", Eigen::Vector3d(0, 0, 1), 1.5, 1'700'000'000.5}};
+  const std::string text = EmitRig(rig);
+  EXPECT_NE(text.find("t0: 1500000000,"), std::string::npos) << text;
+  EXPECT_NE(text.find("t1: 1700000000500000000}"), std::string::npos) << text;
+  EXPECT_TRUE(ParseRigString(text, "emitted", &g_warnings) == rig);
+
+  std::string seconds = text;
+  seconds.replace(seconds.find("t0: 1500000000,"), 15, "t0: 1.5,");
+  try {
+    ParseRigString(seconds, "result.yaml", &g_warnings);
+    FAIL() << "t0 in seconds accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("result.yaml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("observability.motion.t0 (integer nanoseconds)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// SPEC section 7 gives every sensor's T_B_S the sigma keys R_B_S and t_B_S; a gyroscope's
+// position enters no measurement, so its t_B_S (as a SPEC-literal writer gives it) is checked
+// and ignored, with a warning when it would have been a prior.
+TEST(RigYaml, GyroSigmaAndPriorMayCarryATranslation) {
+  std::string text = kMinimal;
+  text += R"(    T_B_S: [[1,0,0,0.1],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+  gyro0:
+    type: gyro
+    noise: {gyroscope_noise_density: 1.0e-4, gyroscope_random_walk: 1.0e-5, update_rate: 200}
+    T_B_S: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+    prior_sigma: {R_B_S: [0.01, 0.01, 0.01], t_B_S: [0.01, 0.01, 0.01], time_offset: 0.01}
+    sigma: {R_B_S: [0.001, 0.001, 0.001], t_B_S: [.inf, .inf, .inf], time_offset: 1.0e-5}
+)";
+  std::vector<std::string> warnings;
+  const RigConfig rig = ParseRigString(text, "gyro.yaml", &warnings);
+  const SensorConfig& gyro = *rig.Find("gyro0");
+  EXPECT_EQ(gyro.prior_sigma.Find("t_B_S"), nullptr);
+  EXPECT_EQ(gyro.sigma.Find("t_B_S"), nullptr);
+  EXPECT_EQ(*gyro.prior_sigma.Find("R_B_S"), (std::vector<double>{0.01, 0.01, 0.01}));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("sensors.gyro0.prior_sigma.t_B_S: ignored"), std::string::npos)
+      << warnings[0];
+
+  std::string bad = text;
+  bad.replace(bad.find("t_B_S: [0.01, 0.01, 0.01]"), 25, "t_B_S: [0.01, 0.01]");
+  try {
+    ParseRigString(bad, "gyro.yaml", &g_warnings);
+    FAIL() << "a gyro t_B_S prior of 2 numbers accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("sensors.gyro0.prior_sigma.t_B_S"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(RigYaml, CameraOnlyRigHasNoTimeOffsets) {
   const std::string text = R"(
 base_imu: left
