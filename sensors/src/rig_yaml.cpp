@@ -268,17 +268,21 @@ class RigReader {
         kind = "a sensor of type camera";
         break;
     }
-    if (is_base) {
-      for (const char* key : {"T_B_S", "time_offset"}) {
-        if (node[key]) {
-          in_.Fail(node[key], where,
-                   std::string(key) +
-                       " is not allowed on the base sensor (its frame is B, its "
-                       "clock the reference)");
-        }
-      }
-    } else {
-      allowed.insert({"T_B_S", "time_offset"});
+    allowed.insert({"T_B_S", "time_offset"});
+    // SPEC section 7 lists T_B_S and time_offset for "all but the base"; a writer that spells
+    // out the base's definition (identity, 0) is read, anything else is an error
+    // (docs/conventions.md, "SPEC read twice").
+    if (is_base && node["T_B_S"] &&
+        in_.Rigid(node["T_B_S"], where + ".T_B_S") != Eigen::Matrix4d::Identity()) {
+      in_.Fail(node["T_B_S"], where,
+               "T_B_S is not allowed on the base sensor other than as the identity (its frame "
+               "is B)");
+    }
+    if (is_base && node["time_offset"] &&
+        in_.FiniteDouble(node["time_offset"], where + ".time_offset") != 0.0) {
+      in_.Fail(node["time_offset"], where,
+               "time_offset is not allowed on the base sensor other than as 0 (its clock is the "
+               "reference)");
     }
     in_.CheckKeys(node, where, allowed, kind);
 

@@ -402,6 +402,36 @@ TEST(RigYaml, GyroSigmaAndPriorMayCarryATranslation) {
   }
 }
 
+// SPEC section 7: T_B_S and time_offset are for "all but the base". A file that spells out the
+// base's definition (identity, 0) reads as the file without them; another value is an error.
+TEST(RigYaml, BaseMayStateItsIdentityExtrinsicAndZeroOffset) {
+  std::string text = kMinimal;
+  const RigConfig plain = ParseRigString(text, "plain.yaml", &g_warnings);
+  const std::string base_keys = "            update_rate: 200}\n";
+  text.replace(text.find(base_keys), base_keys.size(),
+               base_keys +
+                   "    T_B_S: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, "
+                   "0.0], [0.0, 0.0, 0.0, 1.0]]\n    time_offset: 0.0\n");
+  const RigConfig stated = ParseRigString(text, "stated.yaml", &g_warnings);
+  EXPECT_TRUE(stated == plain);
+  const std::string emitted = EmitRig(stated);  // only cam0 carries the two keys
+  EXPECT_EQ(emitted.find("time_offset:"), emitted.rfind("time_offset:")) << emitted;
+  EXPECT_EQ(emitted.find("T_B_S:"), emitted.rfind("T_B_S:")) << emitted;
+
+  std::string shifted = text;
+  shifted.replace(shifted.find("time_offset: 0.0"), 16, "time_offset: 0.001");
+  try {
+    ParseRigString(shifted, "shifted.yaml", &g_warnings);
+    FAIL() << "a base time_offset of 1 ms accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("shifted.yaml:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("sensors.imu0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("time_offset is not allowed on the base"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(RigYaml, CameraOnlyRigHasNoTimeOffsets) {
   const std::string text = R"(
 base_imu: left
