@@ -110,7 +110,9 @@ void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineO
 class RigReader {
  public:
   RigReader(const std::string& file, std::vector<std::string>* warnings)
-      : in_(file), warnings_(warnings) {}
+      : in_(file), warnings_(warnings) {
+    in_.SetWarn([this](const std::string& line) { Emit(line); });
+  }
 
   RigConfig Read(const YAML::Node& root) {
     if (!root.IsMap())
@@ -220,8 +222,9 @@ class RigReader {
     }
   }
 
-  void Warn(const std::string& what) {
-    const std::string line = in_.file() + ": warning: " + what;
+  void Warn(const std::string& what) { Emit(in_.file() + ": warning: " + what); }
+
+  void Emit(const std::string& line) {
     if (warnings_)
       warnings_->push_back(line);
     else

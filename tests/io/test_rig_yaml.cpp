@@ -21,6 +21,16 @@ std::vector<std::string> g_warnings;
 
 const std::string kExample = std::string(CTCAL_SOURCE_DIR) + "/configs/example_rig.yaml";
 
+// The message of reading `text` as `file`, or "(read without error)".
+std::string ParseError(const std::string& text, const std::string& file) {
+  try {
+    ParseRigString(text, file, &g_warnings);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "(read without error)";
+}
+
 constexpr char kMinimal[] = R"(
 base_imu: imu0
 target: {target_type: aprilgrid, tagCols: 6, tagRows: 6, tagSize: 0.088, tagSpacing: 0.3}
@@ -357,15 +367,10 @@ TEST(RigYaml, MotionWindowsAreIntegerNanosecondsInFiles) {
 
   std::string seconds = text;
   seconds.replace(seconds.find("t0: 1500000000,"), 15, "t0: 1.5,");
-  try {
-    ParseRigString(seconds, "result.yaml", &g_warnings);
-    FAIL() << "t0 in seconds accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("result.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("observability.motion.t0 (integer nanoseconds)"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string error = ParseError(seconds, "result.yaml");
+  EXPECT_NE(error.find("result.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("observability.motion.t0 (integer nanoseconds)"), std::string::npos)
+      << error;
 }
 
 // SPEC section 7 gives every sensor's T_B_S the sigma keys R_B_S and t_B_S; a gyroscope's
@@ -393,13 +398,8 @@ TEST(RigYaml, GyroSigmaAndPriorMayCarryATranslation) {
 
   std::string bad = text;
   bad.replace(bad.find("t_B_S: [0.01, 0.01, 0.01]"), 25, "t_B_S: [0.01, 0.01]");
-  try {
-    ParseRigString(bad, "gyro.yaml", &g_warnings);
-    FAIL() << "a gyro t_B_S prior of 2 numbers accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("sensors.gyro0.prior_sigma.t_B_S"), std::string::npos)
-        << e.what();
-  }
+  const std::string error = ParseError(bad, "gyro.yaml");
+  EXPECT_NE(error.find("sensors.gyro0.prior_sigma.t_B_S"), std::string::npos) << error;
 }
 
 // SPEC section 7: T_B_S and time_offset are for "all but the base". A file that spells out the
@@ -420,16 +420,38 @@ TEST(RigYaml, BaseMayStateItsIdentityExtrinsicAndZeroOffset) {
 
   std::string shifted = text;
   shifted.replace(shifted.find("time_offset: 0.0"), 16, "time_offset: 0.001");
-  try {
-    ParseRigString(shifted, "shifted.yaml", &g_warnings);
-    FAIL() << "a base time_offset of 1 ms accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("shifted.yaml:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("sensors.imu0"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("time_offset is not allowed on the base"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string error = ParseError(shifted, "shifted.yaml");
+  EXPECT_NE(error.find("shifted.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("sensors.imu0"), std::string::npos) << error;
+  EXPECT_NE(error.find("time_offset is not allowed on the base"), std::string::npos) << error;
+}
+
+// A drawing's rotation rounded to 4 decimals is taken as the nearest rotation with a warning
+// naming the file, line and key; an exact one is kept bit for bit; a matrix further from a
+// rotation than 1e-3 stays an error.
+TEST(RigYaml, RoundedRotationIsTakenAsTheNearestWithAWarning) {
+  std::string text = kMinimal;
+  text +=
+      "    T_B_S: [[0.9962, -0.0872, 0, 0.1], [0.0872, 0.9962, 0, 0], [0, 0, 1, 0], [0, 0, 0, "
+      "1]]\n";
+  std::vector<std::string> warnings;
+  const RigConfig rig = ParseRigString(text, "drawing.yaml", &warnings);
+  const Eigen::Matrix3d R = rig.Find("cam0")->T_B_S.topLeftCorner<3, 3>();
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 1e-14);
+  EXPECT_NEAR(R(0, 0), 0.9962, 1e-4);
+  EXPECT_NEAR(R(1, 0), 0.0872, 1e-4);
+  EXPECT_EQ(rig.Find("cam0")->T_B_S(0, 3), 0.1);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("drawing.yaml:15: warning: sensors.cam0.T_B_S: rotation not "
+                             "orthonormal"),
+            std::string::npos)
+      << warnings[0];
+
+  std::string far = text;
+  far.replace(far.find("0.9962, -0.0872"), 15, "0.9862, -0.0872");
+  const std::string error = ParseError(far, "far.yaml");
+  EXPECT_NE(error.find("far.yaml:15:"), std::string::npos) << error;
+  EXPECT_NE(error.find("not a rigid transform"), std::string::npos) << error;
 }
 
 TEST(RigYaml, CameraOnlyRigHasNoTimeOffsets) {
