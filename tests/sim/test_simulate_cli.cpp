@@ -32,7 +32,9 @@ std::string Slurp(const fs::path& p) {
 }
 
 Result RunCtcal(const std::string& args) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "ctcal_sim_cli";
+  // One folder per process: ctest -j runs the tests of this file in parallel processes.
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("ctcal_sim_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string cmd = std::string(CTCAL_BINARY) + " simulate " + args + " >" +
                           (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
