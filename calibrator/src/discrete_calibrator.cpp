@@ -125,6 +125,91 @@ class DiscreteProblem {
     log_(Fmt("  gravity_W initialised to [%.4f, %.4f, %.4f]", g.x(), g.y(), g.z()));
   }
 
+  // The largest change of a camera's time offset since the keyframes were chosen (0 at a fixed
+  // keyframe rate, whose keyframes do not follow the frames).
+  double KeyframeDrift() const {
+    if (options_.keyframe_rate_hz > 0.0)
+      return 0.0;
+    double drift = 0.0;
+    for (std::size_t c = 0; c < prep_.cameras.size(); ++c)
+      drift = std::max(
+          drift, std::abs(prep_.cameras[c].state->time_offset - camera_offsets_at_keyframes_[c]));
+    return drift;
+  }
+
+  // Keyframes at the frame times of the current time offsets, with the current solution carried
+  // over from the old keyframes (the caller rebuilds the problem):
+  //  - base pose and velocity: the report's C2 interpolation of the old keyframe states
+  //    (KeyframeTrajectory: position quintic through p, v and the A.1 acceleration at both ends,
+  //    rotation cubic through the corrected rates), which follows the IMU's motion between
+  //    keyframes, where the geodesic A.2 errs by millimetres;
+  //  - biases: the old interval's, as its factors held them;
+  //  - auxiliary velocities: the rigid-body velocity of the interpolated base motion at the new
+  //    time plus the old state's deviation from it, linearly interpolated (the deviation is
+  //    smooth; the velocity itself changes by ~m/s^2 x 25 ms between keyframes). The old state k
+  //    sits at base time t_k + s, s the offset's change since the last build (AuxImuFunctor).
+  void RechooseKeyframes() {
+    problem_.reset();  // reads the old keyframes' memory
+    const std::vector<Keyframe> old = kf_;
+    std::vector<double> t_old;
+    for (const Keyframe& k : old)
+      t_old.push_back(k.t);
+    ImuIntrinsics* base = &*state_.base().imu;
+    const TrajectoryEvaluator motion =
+        KeyframeTrajectory(old, base, state_.gravity(), prep_.t0_ns, nullptr);
+    const auto kin_at = [&](double t) {
+      return motion(prep_.t0_ns + static_cast<std::int64_t>(std::llround(t * 1e9)), 1);
+    };
+    // The old keyframe whose interval holds t (clamped to the ends).
+    const auto interval_of = [&](double t) {
+      const auto it = std::upper_bound(t_old.begin(), t_old.end(), t);
+      return static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(
+          it - t_old.begin() - 1, 0, static_cast<std::ptrdiff_t>(t_old.size()) - 2));
+    };
+    std::vector<std::vector<Eigen::Vector3d>> deviation(aux_.size());
+    for (std::size_t i = 0; i < aux_.size(); ++i) {
+      const AuxStates& a = aux_[i];
+      const double s = a.in->state->time_offset - a.time_offset_at_build;
+      for (std::size_t k = 0; k < old.size(); ++k) {
+        const Se3Kinematics<double> kin = kin_at(old[k].t + s);
+        const Eigen::Vector3d rigid = kin.v_W + kin.R_W_B * kin.w_B.cross(a.in->state->p_B_S());
+        deviation[i].push_back(Eigen::Vector3d(a.v[k].data()) - rigid);
+      }
+    }
+
+    ChooseKeyframes();
+    for (Keyframe& k : kf_) {
+      const Se3Kinematics<double> kin = kin_at(k.t);
+      const Eigen::Quaterniond q(kin.R_W_B);
+      k.q_W_B = {q.x(), q.y(), q.z(), q.w()};
+      Eigen::Map<Eigen::Vector3d>(k.p_W_B.data()) = kin.p_W_B;
+      Eigen::Map<Eigen::Vector3d>(k.v_W.data()) = kin.v_W;
+      const Keyframe& from = old[interval_of(k.t)];
+      k.b_g = from.b_g;
+      k.b_a = from.b_a;
+    }
+    for (std::size_t i = 0; i < aux_.size(); ++i) {
+      AuxStates& a = aux_[i];
+      const double s = a.in->state->time_offset - a.time_offset_at_build;
+      const std::size_t n = kf_.size();
+      std::vector<std::array<double, 3>> v(n), bg(n), ba(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        const double t = kf_[k].t - s;  // on the old states' time axis
+        const std::size_t j = interval_of(t);
+        const double u = std::clamp((t - t_old[j]) / (t_old[j + 1] - t_old[j]), 0.0, 1.0);
+        const Se3Kinematics<double> kin = kin_at(kf_[k].t);
+        const Eigen::Vector3d v_k = kin.v_W + kin.R_W_B * kin.w_B.cross(a.in->state->p_B_S()) +
+                                    (1.0 - u) * deviation[i][j] + u * deviation[i][j + 1];
+        v[k] = {v_k.x(), v_k.y(), v_k.z()};
+        bg[k] = a.bg[j];
+        ba[k] = a.ba[j];
+      }
+      a.v = std::move(v);
+      a.bg = std::move(bg);
+      a.ba = std::move(ba);
+    }
+  }
+
   void Build(bool robust) {
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -230,6 +315,15 @@ class DiscreteProblem {
         changed += static_cast<int>(kf_.size());
     }
     return changed;
+  }
+
+  // Corners of the current problem read through A.1 and through A.2.
+  void CountInterpolation(int* kinematic, int* geodesic) const {
+    *kinematic = *geodesic = 0;
+    for (const auto& cam : corner_slots_) {
+      for (const auto& entry : cam)
+        ++(entry.second.kinematic ? *kinematic : *geodesic);
+    }
   }
 
   void Finish(SplineCalibrationResult* out) {
@@ -364,6 +458,9 @@ class DiscreteProblem {
         times.push_back(t);
       }
     }
+    camera_offsets_at_keyframes_.clear();
+    for (const PreparedCamera& cam : prep_.cameras)
+      camera_offsets_at_keyframes_.push_back(cam.state->time_offset);
     if (times.size() < 3)
       throw CalibrationInputError("too few keyframes (" + std::to_string(times.size()) +
                                   ") in the sensors' common time range");
@@ -654,6 +751,7 @@ class DiscreteProblem {
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<CornerSlot> slots_;
+  std::vector<double> camera_offsets_at_keyframes_;  // per camera, when the keyframes were chosen
   So3LeftManifold so3_left_;
   ceres::SphereManifold<3> sphere_;
 };
@@ -714,17 +812,38 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   solve("[4/6] robust solve (Huber on the corners)");
   dp.RemoveOutliers(&out.outliers);
   spline_internal::LogOutliers(out.outliers, options.outlier_probability, log);
+  // Keyframes placed at the guessed time offsets are re-placed once the offsets have moved (the
+  // robust stage's corners stayed on the keyframes they were built with, through A.1 at the
+  // offset's change, so its outlier gate above is unaffected).
+  const double rechoose_s = options.rechoose_keyframes_fraction * options.kinematic_window_s;
+  const auto rechoose = [&] {
+    const double drift = dp.KeyframeDrift();
+    if (drift <= rechoose_s)
+      return false;
+    log(Fmt("  keyframes re-chosen: offsets moved %.2f ms", 1e3 * drift));
+    dp.RechooseKeyframes();
+    ++out.keyframe_rechoices;
+    return true;
+  };
+  rechoose();
   dp.Build(false);
   ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
   for (int round = 0; round < options.max_rebuild_rounds; ++round) {
-    const int changed = dp.CountRebuild();
-    if (changed == 0)
-      break;
-    log("  " + std::to_string(changed) +
-        " residuals moved to other keyframes with the time offsets: rebuilt");
+    if (!rechoose()) {
+      const int changed = dp.CountRebuild();
+      if (changed == 0)
+        break;
+      log("  " + std::to_string(changed) +
+          " residuals moved to other keyframes with the time offsets: rebuilt");
+    }
     dp.Build(false);
     last = solve("  re-solve");
   }
+  out.num_keyframes = dp.NumKeyframes();
+  dp.CountInterpolation(&out.num_kinematic_corners, &out.num_geodesic_corners);
+  log(Fmt("  %.0f keyframes; corners interpolated by A.1: %.0f, by A.2: %.0f",
+          static_cast<double>(out.num_keyframes), static_cast<double>(out.num_kinematic_corners),
+          static_cast<double>(out.num_geodesic_corners)));
   out.iterations = iterations;
   out.solve_seconds = solve_seconds;
   out.seconds_per_iteration = iterations > 0 ? solve_seconds / iterations : 0.0;

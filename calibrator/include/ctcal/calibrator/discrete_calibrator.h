@@ -32,6 +32,12 @@ struct DiscreteCalibratorOptions {
   double max_gap_s = 0.1;         // longer gaps between keyframes get keyframes in between
   // A corner within this time of its nearest keyframe uses A.1, else A.2.
   double kinematic_window_s = 0.01;
+  // The keyframes sit at the camera frame times of the time offsets they were chosen with; once
+  // a camera's offset has moved by more than this fraction of kinematic_window_s since then
+  // (checked after the robust stage and after every later solve), they are re-chosen at the
+  // current offsets and the solution is carried over to them. Without it a guess more than the
+  // window off leaves every corner of that camera on A.2 (docs/discrete.md, "Keyframes").
+  double rechoose_keyframes_fraction = 0.1;
   int threads = 0;
   int max_iterations = 50;
   double huber_threshold = 3.0;
@@ -48,7 +54,10 @@ struct DiscreteCalibratorOptions {
 // The spline result's fields (result rig, outliers, timings, warnings) plus the keyframe count;
 // knot_spacing_s / num_knots are those of the initial trajectory spline.
 struct DiscreteCalibrationResult : SplineCalibrationResult {
-  int num_keyframes = 0;
+  int num_keyframes = 0;          // of the final problem
+  int keyframe_rechoices = 0;     // how often the keyframes were re-chosen (rechoose_keyframes_*)
+  int num_kinematic_corners = 0;  // corners of the final problem interpolated by A.1
+  int num_geodesic_corners = 0;   // ... by A.2
 };
 
 // Throws CalibrationInputError naming the sensor for data it cannot use, CalibrationFailure for a
