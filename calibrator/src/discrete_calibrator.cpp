@@ -125,15 +125,16 @@ class DiscreteProblem {
     log_(Fmt("  gravity_W initialised to [%.4f, %.4f, %.4f]", g.x(), g.y(), g.z()));
   }
 
-  // The largest change of a camera's time offset since the keyframes were chosen (0 at a fixed
-  // keyframe rate, whose keyframes do not follow the frames).
+  // The largest change of a sensor's time offset since the keyframes were chosen: the cameras'
+  // place the keyframes, the auxiliary sensors' anchor their intervals (at tau = t_k - offset)
+  // and bound the common time range.
   double KeyframeDrift() const {
-    if (options_.keyframe_rate_hz > 0.0)
-      return 0.0;
     double drift = 0.0;
-    for (std::size_t c = 0; c < prep_.cameras.size(); ++c)
-      drift = std::max(
-          drift, std::abs(prep_.cameras[c].state->time_offset - camera_offsets_at_keyframes_[c]));
+    std::size_t i = 0;
+    for (const PreparedCamera& cam : prep_.cameras)
+      drift = std::max(drift, std::abs(cam.state->time_offset - offsets_at_keyframes_[i++]));
+    for (const AuxStates& a : aux_)
+      drift = std::max(drift, std::abs(a.in->state->time_offset - offsets_at_keyframes_[i++]));
     return drift;
   }
 
@@ -458,9 +459,11 @@ class DiscreteProblem {
         times.push_back(t);
       }
     }
-    camera_offsets_at_keyframes_.clear();
+    offsets_at_keyframes_.clear();
     for (const PreparedCamera& cam : prep_.cameras)
-      camera_offsets_at_keyframes_.push_back(cam.state->time_offset);
+      offsets_at_keyframes_.push_back(cam.state->time_offset);
+    for (const AuxStates& a : aux_)
+      offsets_at_keyframes_.push_back(a.in->state->time_offset);
     if (times.size() < 3)
       throw CalibrationInputError("too few keyframes (" + std::to_string(times.size()) +
                                   ") in the sensors' common time range");
@@ -751,7 +754,8 @@ class DiscreteProblem {
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<CornerSlot> slots_;
-  std::vector<double> camera_offsets_at_keyframes_;  // per camera, when the keyframes were chosen
+  // Per camera, then per auxiliary sensor: the time offsets the keyframes were chosen with.
+  std::vector<double> offsets_at_keyframes_;
   So3LeftManifold so3_left_;
   ceres::SphereManifold<3> sphere_;
 };

@@ -32,11 +32,12 @@ struct DiscreteCalibratorOptions {
   double max_gap_s = 0.1;         // longer gaps between keyframes get keyframes in between
   // A corner within this time of its nearest keyframe uses A.1, else A.2.
   double kinematic_window_s = 0.01;
-  // The keyframes sit at the camera frame times of the time offsets they were chosen with; once
-  // a camera's offset has moved by more than this fraction of kinematic_window_s since then
-  // (checked after the robust stage and after every later solve), they are re-chosen at the
-  // current offsets and the solution is carried over to them. Without it a guess more than the
-  // window off leaves every corner of that camera on A.2 (docs/discrete.md, "Keyframes").
+  // The keyframes sit at the camera frame times of the time offsets they were chosen with, and
+  // the auxiliary sensors' intervals start at those times less their offsets; once any time
+  // offset has moved by more than this fraction of kinematic_window_s since then (checked after
+  // the robust stage and after every later solve), the keyframes are re-chosen at the current
+  // offsets and the solution is carried over to them. Without it a camera guess more than the
+  // window off leaves its corners on A.2 (docs/discrete.md, "Keyframes").
   double rechoose_keyframes_fraction = 0.1;
   int threads = 0;
   int max_iterations = 50;
