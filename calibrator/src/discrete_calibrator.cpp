@@ -212,6 +212,7 @@ class DiscreteProblem {
   }
 
   void Build(bool robust) {
+    robust_ = robust;
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_ = std::make_unique<ceres::Problem>(po);
@@ -263,11 +264,23 @@ class DiscreteProblem {
     spline_internal::BoundCameraParameters(prep_.cameras, &P);
   }
 
+  // The spline problem's solver settings (SplineProblem::Solve): Gauss-Newton steps from the
+  // start (trust region 1e8; every solve starts in the basin: the initial trajectory, then the
+  // previous solve's states), a relative cost change of 1e-6 for the robust solve (it only seeds
+  // the outlier gate), and the plain solves stop once a step would lower the cost by less than
+  // stop_cost_change (every scalar within sqrt(2 stop_cost_change) sigma of the converged one).
   ceres::Solver::Summary Solve() {
     spline_internal::IterationLogger logger(log_);
     ceres::Solver::Options so = spline_internal::SolverOptions(spline_options_, &logger);
+    so.initial_trust_region_radius = 1e8;
+    if (robust_)
+      so.function_tolerance = 1e-6;
+    else if (spline_options_.stop_cost_change > 0.0 && last_cost_ > 0.0)
+      so.function_tolerance =
+          std::max(so.function_tolerance, spline_options_.stop_cost_change / last_cost_);
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem_.get(), &summary);
+    last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +
                                "): check the initial guesses and the noise settings");
@@ -447,7 +460,7 @@ class DiscreteProblem {
       }
       std::sort(frames.begin(), frames.end());
       for (const double t : frames) {
-        if (!times.empty() && t - times.back() < options_.merge_s)
+        if (!times.empty() && t - times.back() < MergeSpacing())
           continue;
         if (!times.empty() && t - times.back() > options_.max_gap_s) {
           const double gap = t - times.back();
@@ -481,6 +494,26 @@ class DiscreteProblem {
     log_(Fmt("  %.0f keyframes over %.3f s (mean spacing %.4f s)", static_cast<double>(kf_.size()),
              times.back() - times.front(),
              (times.back() - times.front()) / static_cast<double>(times.size() - 1)));
+  }
+
+  // Camera frames closer than this share a keyframe: merge_s, and at least 1.5 sample periods of
+  // every IMU, so that each preintegration interval holds a sample. An interval without one is
+  // a single integration step, whose [dv, dp] covariance has rank 3 (dp = dv h / 2 for the one
+  // reading): the whitening fails (seed 302 of the 5 s Monte Carlo, two frames 2.04 ms apart at
+  // 250 Hz). The later frame's corners are read through A.1 at up to that distance (6 ms at
+  // 250 Hz, where the midpoint A.1 errs by ~1e-6 rad).
+  double MergeSpacing() const {
+    double period = 0.0;
+    const auto longest = [&period](const std::vector<RawImuSample>& z) {
+      if (z.size() > 1)
+        period = std::max(period, (z.back().t - z.front().t) / static_cast<double>(z.size() - 1));
+    };
+    longest(base_samples_);
+    for (const AuxStates& a : aux_) {
+      if (a.in->state->config.type == SensorType::kImu)
+        longest(a.samples);
+    }
+    return std::max(options_.merge_s, 1.5 * period);
   }
 
   static RawImuSample RawAt(const std::vector<RawImuSample>& s, double t) {
@@ -756,6 +789,8 @@ class DiscreteProblem {
   std::vector<CornerSlot> slots_;
   // Per camera, then per auxiliary sensor: the time offsets the keyframes were chosen with.
   std::vector<double> offsets_at_keyframes_;
+  bool robust_ = false;
+  double last_cost_ = 0.0;  // of the last solve
   So3LeftManifold so3_left_;
   ceres::SphereManifold<3> sphere_;
 };
@@ -781,6 +816,7 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   so.min_corners_per_view = options.min_corners_per_view;
   so.min_views = options.min_views;
   so.compute_covariance = options.compute_covariance;
+  so.stop_cost_change = options.stop_cost_change;
 
   log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu +
       " (discrete, aux velocity " +

@@ -65,6 +65,8 @@ TEST(DiscreteCalibrator, KeyframesFollowCameraOffsetsGuessedFifteenMillisecondsO
     off.Find(cam)->time_offset += 0.015;
   DiscreteCalibratorOptions options;
   options.threads = 2;
+  // Both fully converged: each run's stop criterion alone allows 0.1 sigma (tested below).
+  options.stop_cost_change = 0.0;
   const auto quiet = [](const std::string&) {};
   const DiscreteCalibrationResult ref = CalibrateDiscrete(from_truth, r.data, options, quiet);
   const DiscreteCalibrationResult moved = CalibrateDiscrete(off, r.data, options, quiet);
@@ -103,6 +105,40 @@ TEST(DiscreteCalibrator, KeyframesFollowCameraOffsetsGuessedFifteenMillisecondsO
       "re-choosing %d/%d); worst |moved - from truth| %.3f sigma over %d scalars\n",
       moved.keyframe_rechoices, moved.num_kinematic_corners, moved.num_geodesic_corners,
       stuck.num_kinematic_corners, stuck.num_geodesic_corners, worst, compared);
+}
+
+}  // namespace
+}  // namespace ctcal
+
+namespace ctcal {
+namespace {
+
+// The stop criterion of the plain solves (DiscreteCalibratorOptions::stop_cost_change, as the
+// spline's) bounds every estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1
+// of its sigma; the run without it (Ceres' relative tolerances of 1e-10 only) is the reference.
+TEST(DiscreteCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate) {
+  const SimulatedRecording r = SimulateTable4(sim::Scenario::kFull, 3.0, 48);
+  DiscreteCalibratorOptions options;
+  options.threads = 2;
+  DiscreteCalibratorOptions converged = options;
+  converged.stop_cost_change = 0.0;
+  const auto quiet = [](const std::string&) {};
+  const DiscreteCalibrationResult fast = CalibrateDiscrete(r.guess, r.data, options, quiet);
+  const DiscreteCalibrationResult ref = CalibrateDiscrete(r.guess, r.data, converged, quiet);
+  EXPECT_LE(fast.iterations, ref.iterations);
+  const Comparison c = CompareRigs(ref.result, fast.result);
+  int compared = 0;
+  double worst = 0.0;
+  for (const ComparisonRow& row : c.rows) {
+    if (!row.error_over_sigma.has_value())
+      continue;
+    ++compared;
+    worst = std::max(worst, std::abs(*row.error_over_sigma));
+    EXPECT_LT(std::abs(*row.error_over_sigma), 0.1) << row.name << ": " << row.error;
+  }
+  EXPECT_GE(compared, 95);
+  std::printf("stop criterion: %d vs %d iterations, worst |fast - converged| %.4f sigma\n",
+              fast.iterations, ref.iterations, worst);
 }
 
 }  // namespace
