@@ -12,6 +12,7 @@
 
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/sensors/compare.h"
+#include "estimate_agreement.h"
 #include "simulated_recording.h"
 
 namespace ctcal {
@@ -76,18 +77,8 @@ TEST(DiscreteCalibrator, KeyframesFollowCameraOffsetsGuessedFifteenMillisecondsO
   EXPECT_GT(moved.num_kinematic_corners, 0);
   EXPECT_EQ(ref.keyframe_rechoices, 0);
   EXPECT_EQ(ref.num_geodesic_corners, 0);
-  // error = moved - reference, sigma = moved's.
-  const Comparison c = CompareRigs(ref.result, moved.result);
-  int compared = 0;
-  double worst = 0.0;
-  for (const ComparisonRow& row : c.rows) {
-    if (!row.error_over_sigma.has_value())
-      continue;
-    ++compared;
-    worst = std::max(worst, std::abs(*row.error_over_sigma));
-    EXPECT_LT(std::abs(*row.error_over_sigma), 0.1) << row.name << ": " << row.error;
-  }
-  EXPECT_GE(compared, 95);
+  const Agreement agree = ExpectAgreement(ref.result, moved.result, 0.1);
+  EXPECT_GE(agree.compared, 95);
   // And both near the truth (the 3 s recording's sigmas).
   const Comparison vs_truth = CompareRigs(r.truth, moved.result);
   ASSERT_TRUE(vs_truth.summary.worst_error_over_sigma.has_value());
@@ -104,7 +95,7 @@ TEST(DiscreteCalibrator, KeyframesFollowCameraOffsetsGuessedFifteenMillisecondsO
       "camera offset guesses +15 ms: %d re-choice(s), A.1/A.2 corners %d/%d (without "
       "re-choosing %d/%d); worst |moved - from truth| %.3f sigma over %d scalars\n",
       moved.keyframe_rechoices, moved.num_kinematic_corners, moved.num_geodesic_corners,
-      stuck.num_kinematic_corners, stuck.num_geodesic_corners, worst, compared);
+      stuck.num_kinematic_corners, stuck.num_geodesic_corners, agree.worst, agree.compared);
 }
 
 }  // namespace
@@ -126,19 +117,10 @@ TEST(DiscreteCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstima
   const DiscreteCalibrationResult fast = CalibrateDiscrete(r.guess, r.data, options, quiet);
   const DiscreteCalibrationResult ref = CalibrateDiscrete(r.guess, r.data, converged, quiet);
   EXPECT_LE(fast.iterations, ref.iterations);
-  const Comparison c = CompareRigs(ref.result, fast.result);
-  int compared = 0;
-  double worst = 0.0;
-  for (const ComparisonRow& row : c.rows) {
-    if (!row.error_over_sigma.has_value())
-      continue;
-    ++compared;
-    worst = std::max(worst, std::abs(*row.error_over_sigma));
-    EXPECT_LT(std::abs(*row.error_over_sigma), 0.1) << row.name << ": " << row.error;
-  }
-  EXPECT_GE(compared, 95);
+  const Agreement a = ExpectAgreement(ref.result, fast.result, 0.1);
+  EXPECT_GE(a.compared, 95);
   std::printf("stop criterion: %d vs %d iterations, worst |fast - converged| %.4f sigma\n",
-              fast.iterations, ref.iterations, worst);
+              fast.iterations, ref.iterations, a.worst);
 }
 
 }  // namespace
