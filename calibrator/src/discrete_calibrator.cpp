@@ -138,6 +138,18 @@ class DiscreteProblem {
     return drift;
   }
 
+  // Re-chooses the keyframes (RechooseKeyframes) when a time offset has moved by more than
+  // rechoose_keyframes_fraction of the A.1 window since they were chosen; says so, or returns
+  // empty.
+  std::string MaybeRechoose() {
+    const double drift = KeyframeDrift();
+    if (drift <= options_.rechoose_keyframes_fraction * options_.kinematic_window_s)
+      return {};
+    RechooseKeyframes();
+    ++rechoices_;
+    return Fmt("keyframes re-chosen: offsets moved %.2f ms", 1e3 * drift);
+  }
+
   // Keyframes at the frame times of the current time offsets, with the current solution carried
   // over from the old keyframes (the caller rebuilds the problem):
   //  - base pose and velocity: the report's C2 interpolation of the old keyframe states
@@ -288,8 +300,8 @@ class DiscreteProblem {
   }
 
   // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.
-  void RemoveOutliers(std::vector<CameraOutliers>* report) {
-    const double gate = -2.0 * std::log(1.0 - options_.outlier_probability);
+  void RemoveOutliers(double probability, std::vector<CameraOutliers>* report) {
+    const double gate = -2.0 * std::log(1.0 - probability);
     for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
       PreparedCamera& cam = prep_.cameras[c];
       CameraOutliers o;
@@ -330,6 +342,27 @@ class DiscreteProblem {
     }
     return changed;
   }
+
+  // RunStages' hooks (spline_problem_impl.h). Keyframes placed at the guessed time offsets are
+  // re-placed once the offsets have moved (the robust stage's corners stayed on the keyframes
+  // they were built with, through A.1 at the offset's change, so its outlier gate is unaffected);
+  // otherwise a rebuild while the offsets move residuals to other keyframes or interpolation.
+  void BeforePlainSolve() {
+    const std::string why = MaybeRechoose();
+    if (!why.empty())
+      log_("  " + why);
+  }
+  std::string NextRebuild() {
+    std::string why = MaybeRechoose();
+    if (why.empty()) {
+      const int changed = CountRebuild();
+      if (changed > 0)
+        why = std::to_string(changed) +
+              " residuals moved to other keyframes with the time offsets: rebuilt";
+    }
+    return why;
+  }
+  int Rechoices() const { return rechoices_; }
 
   // Corners of the current problem read through A.1 and through A.2.
   void CountInterpolation(int* kinematic, int* geodesic) const {
@@ -791,6 +824,7 @@ class DiscreteProblem {
   std::vector<double> offsets_at_keyframes_;
   bool robust_ = false;
   double last_cost_ = 0.0;  // of the last solve
+  int rechoices_ = 0;
   So3LeftManifold so3_left_;
   ceres::SphereManifold<3> sphere_;
 };
@@ -848,37 +882,9 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
     log(line);
     return s;
   };
-  dp.Build(true);
-  solve("[4/6] robust solve (Huber on the corners)");
-  dp.RemoveOutliers(&out.outliers);
-  spline_internal::LogOutliers(out.outliers, options.outlier_probability, log);
-  // Keyframes placed at the guessed time offsets are re-placed once the offsets have moved (the
-  // robust stage's corners stayed on the keyframes they were built with, through A.1 at the
-  // offset's change, so its outlier gate above is unaffected).
-  const double rechoose_s = options.rechoose_keyframes_fraction * options.kinematic_window_s;
-  const auto rechoose = [&] {
-    const double drift = dp.KeyframeDrift();
-    if (drift <= rechoose_s)
-      return false;
-    log(Fmt("  keyframes re-chosen: offsets moved %.2f ms", 1e3 * drift));
-    dp.RechooseKeyframes();
-    ++out.keyframe_rechoices;
-    return true;
-  };
-  rechoose();
-  dp.Build(false);
-  ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
-  for (int round = 0; round < options.max_rebuild_rounds; ++round) {
-    if (!rechoose()) {
-      const int changed = dp.CountRebuild();
-      if (changed == 0)
-        break;
-      log("  " + std::to_string(changed) +
-          " residuals moved to other keyframes with the time offsets: rebuilt");
-    }
-    dp.Build(false);
-    last = solve("  re-solve");
-  }
+  const ceres::Solver::Summary last = spline_internal::RunStages(
+      &dp, solve, options.outlier_probability, options.max_rebuild_rounds, log, &out.outliers);
+  out.keyframe_rechoices = dp.Rechoices();
   out.num_keyframes = dp.NumKeyframes();
   dp.CountInterpolation(&out.num_kinematic_corners, &out.num_geodesic_corners);
   log(Fmt("  %.0f keyframes; corners interpolated by A.1: %.0f, by A.2: %.0f",
