@@ -101,6 +101,10 @@ MarginalInformation ComputeMarginalInformation(
   for (int i = 0; i < n; ++i)
     max_diag = std::max(max_diag, H_nn.coeff(i, i));
   Eigen::CholmodSupernodalLLT<SparseColMajor> llt;
+  // A failed attempt is expected (the knots beyond the data that the time-offset margin adds have
+  // no information) and handled by the damping below, which is reported; CHOLMOD's own message
+  // would only alarm the user, so it stays silent (print level 0) and info() is checked instead.
+  llt.cholmod().print = 0;
   for (const double relative : {0.0, 1e-12, 1e-9, 1e-6}) {
     SparseColMajor damped = H_nn;
     if (relative > 0.0) {
