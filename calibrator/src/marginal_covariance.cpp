@@ -117,11 +117,20 @@ MarginalInformation ComputeMarginalInformation(
       select.emplace_back(i, static_cast<int>(select.size()), 1.0);
   }
   const int m = static_cast<int>(select.size());
-  SparseColMajor S(n, m);
-  S.setFromTriplets(select.begin(), select.end());
-  const SparseColMajor St = S.transpose();
-  const SparseColMajor H_nn = St * SparseColMajor(H.topLeftCorner(n, n)) * S;
-  const Eigen::MatrixXd H_nc = Eigen::MatrixXd(St * SparseColMajor(H.topRightCorner(n, c)));
+  SparseColMajor H_nn;
+  Eigen::MatrixXd H_nc;
+  if (m == n) {
+    // Every state touched (the usual case): the selection is the identity, skip its two sparse
+    // products over all of H_nn (~0.6 s CPU on the 60 s demo).
+    H_nn = H.topLeftCorner(n, n);
+    H_nc = Eigen::MatrixXd(H.topRightCorner(n, c));
+  } else {
+    SparseColMajor S(n, m);
+    S.setFromTriplets(select.begin(), select.end());
+    const SparseColMajor St = S.transpose();
+    H_nn = St * SparseColMajor(H.topLeftCorner(n, n)) * S;
+    H_nc = Eigen::MatrixXd(St * SparseColMajor(H.topRightCorner(n, c)));
+  }
 
   // A combination of touched nuisance states the data do not determine makes H_nn singular;
   // damping it by a tiny fraction of its scale marginalises it with a flat prior instead of
