@@ -260,17 +260,6 @@ void ForEveryImuModel(unsigned seed, const Check& check) {
   }
 }
 
-// The densities of EuRoC's ADIS16448 (rounded) sampled at rate_hz.
-inline InertialNoise ImuNoise(double rate_hz) {
-  InertialNoise n;
-  n.gyroscope_noise_density = 1.7e-4;
-  n.gyroscope_random_walk = 2e-5;
-  n.accelerometer_noise_density = 2e-3;
-  n.accelerometer_random_walk = 3e-3;
-  n.update_rate = rate_hz;
-  return n;
-}
-
 // What the base and auxiliary IMU residuals read besides their own sensor: a trajectory with
 // knots every 50 ms, gravity, and gyroscope and accelerometer bias splines with knots every 0.4 s,
 // drawn from seed, seed + 1 and seed + 2.
@@ -341,6 +330,19 @@ void ExpectZeroOnBothPaths(const Make& make, const std::vector<double*>& blocks,
     ASSERT_TRUE(e.ok);
     EXPECT_LT(e.r.norm(), tol) << (analytic ? "analytic " : "autodiff ") << e.r.transpose();
   }
+}
+
+// The zero-at-truth check of an IMU residual over every IMU model x g_sensitivity at one stamp,
+// for a fixture with Truth(intrinsics, stamp, &first, &bias_first), Blocks(first, bias_first,
+// &intrinsics) and a static MakeResidual(analytic, setup).
+template <class Fixture>
+void ExpectZeroAtTruthForEveryImuModel(Fixture* fixture, std::int64_t stamp_ns, unsigned seed) {
+  ForEveryImuModel(seed, [&](const std::string&, ImuIntrinsics* intrinsics) {
+    int first = 0, bias_first = 0;
+    const auto setup = fixture->Truth(*intrinsics, stamp_ns, &first, &bias_first);
+    ExpectZeroOnBothPaths([&](bool analytic) { return Fixture::MakeResidual(analytic, setup); },
+                          fixture->Blocks(first, bias_first, intrinsics), 1e-7);
+  });
 }
 
 // J_ambient * PlusJacobian: the Jacobian with respect to the block's tangent (what Ceres uses).
