@@ -70,7 +70,7 @@ TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
     for (const TimedPose& p : poses) {
       // The ground truth is at the base IMU's samples (4 ms apart): take the nearest one, within
       // 2 ms, and its pose at the view's time by its velocity (the rotation moves < 0.2 deg).
-      for (const GroundTruthState& g0 : gt) {
+      for (const GroundTruthState& g0 : sim.gt) {
         if (std::llabs(g0.t_ns - p.t_ns) > 2000000)
           continue;
         GroundTruthState g = g0;
