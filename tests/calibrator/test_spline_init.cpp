@@ -3,6 +3,7 @@
 // pose within the single-frame PnP precision of 1 px noise (< 1.5 deg, < 2.5 cm; the wrong branch
 // of the planar pose ambiguity is off by several degrees).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -22,7 +23,8 @@
 namespace ctcal {
 namespace {
 
-// A 3 s recording of the default rig's full scenario: the truth, the data, the ground truth.
+// A 3 s recording of the default rig's full scenario, simulated once per process: the truth, the
+// data, the ground truth.
 struct Simulated {
   RigConfig truth;
   std::map<std::string, SensorData> data;
@@ -31,13 +33,14 @@ struct Simulated {
 
 const Simulated& Simulation() {
   static const Simulated sim = [] {
-    const std::string dir =
-        test::SimulateOnce("ctcal_spline_init_21", "--scenario full --seed 21 --duration 3");
+    const std::string dir = test::SimulateOnce("ctcal_spline_init_21_" + std::to_string(::getpid()),
+                                               "--scenario full --seed 21 --duration 3");
     Simulated s;
     std::vector<std::string> warnings;
     s.truth = LoadRig(dir + "/truth.yaml", &warnings);
     s.data = LoadDataset(dir, s.truth, &warnings);
     s.gt = ReadGroundTruthCsv(dir + "/groundtruth/data.csv");
+    std::filesystem::remove_all(dir);
     return s;
   }();
   return sim;
