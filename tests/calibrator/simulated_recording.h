@@ -1,10 +1,13 @@
-// Shared by the calibrator tests that start from a recording written by `ctcal simulate` (the
-// path users take): simulate once, load the guess, the truth and the data, keep the solver quiet,
-// and catch the one error bad input must give.
+// Simulated recordings of the default rig for the calibration tests: in memory
+// (SimulateTable4, the measurements, truth and guess that `ctcal simulate --scenario S --seed N
+// --duration D --perturb table4` writes, for tests that need no files), or written by `ctcal
+// simulate` itself (the path users take) and loaded back, with a quiet log and the one error bad
+// input must give.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -12,7 +15,37 @@
 
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/rig.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "ctcal/sim/dataset_writer.h"
+#include "ctcal/sim/default_rig.h"
+#include "ctcal/sim/perturb.h"
+#include "ctcal/sim/scenario.h"
+#include "ctcal/sim/simulator.h"
+
+namespace ctcal {
+
+struct SimulatedRecording {
+  RigConfig truth;
+  RigConfig guess;  // table4, with its prior_sigma
+  std::map<std::string, SensorData> data;
+};
+
+inline SimulatedRecording SimulateTable4(sim::Scenario scenario, double duration,
+                                         std::uint64_t seed) {
+  const RigConfig rig = sim::DefaultRig();
+  const auto motion = sim::MakeTrajectory(scenario, sim::SceneFor(rig.target));
+  const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(rig));
+  sim::SimOptions options;
+  options.duration = duration;
+  options.seed = seed;
+  const sim::SimulatedDataset data = sim::Simulate(rig, traj, options);
+  sim::Random rng = sim::Random(seed).Fork(sim::kPerturbationStream);
+  return {data.truth, sim::PerturbRig(rig, sim::Perturbation::kTable4, rng),
+          sim::ToSensorData(data)};
+}
+
+}  // namespace ctcal
 
 namespace ctcal::test {
 
