@@ -189,6 +189,25 @@ TEST(Dataset, ReadsFilesWithoutHeaderAndWithWindowsLineEnds) {
   EXPECT_EQ(ReadImuCsv(dir + "/imu1/data.csv").front().w_m.x(), -0.099134701513277898);
 }
 
+// A blank line ends a file only at its end (tests/data/bad/imu_empty_line.csv: one in the
+// middle stays an error at its own line).
+TEST(Dataset, BlankLinesAtTheEndAreTheEndOfTheFile) {
+  const std::string dir = TempDir("blank");
+  WriteText(dir + "/gyro0/data.csv",
+            "#timestamp [ns],w_x,w_y,w_z [rad/s]\n100,1,2,3\n200,4,5,6\n\n \r\n");
+  const std::vector<GyroSample> s = ReadGyroCsv(dir + "/gyro0/data.csv");
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_EQ(s[1].w_m.z(), 6.0);
+  WriteText(dir + "/gyro1/data.csv", "100,1,2,3\n\n\n200,4,5,6\n");
+  try {
+    ReadGyroCsv(dir + "/gyro1/data.csv");
+    FAIL() << "a blank line between rows accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("gyro1/data.csv:2: empty line"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Dataset, LoaderTakesCornersWithoutImagesAndChecksImagesOtherwise) {
   const std::string dir = TempDir("loader");
   const RigConfig rig = ParseRigString(R"(

@@ -2,6 +2,7 @@
 // readers, byte-identical reruns, and one clear error line for bad options.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -21,7 +22,9 @@ namespace fs = std::filesystem;
 using test::Slurp;
 
 test::CliRun RunCtcal(const std::string& args) {
-  return test::RunCtcal("simulate " + args, ::testing::TempDir() + "/ctcal_sim_cli");
+  // One folder per process: ctest -j runs the tests of this file in parallel processes.
+  return test::RunCtcal("simulate " + args,
+                        ::testing::TempDir() + "/ctcal_sim_cli_" + std::to_string(::getpid()));
 }
 
 class SimulateCli : public ::testing::Test {
@@ -122,6 +125,24 @@ TEST_F(SimulateCli, ImagesReplaceTheCornersByRenderedFrames) {
     const auto images = ReadImageCsv(Dir("i") + "/" + cam + "/data.csv", /*check_images=*/true);
     EXPECT_GE(images.size(), 4u);
   }
+}
+
+// Simulating into a folder of an earlier run that this run would leave half stale is one clear
+// error: corners.csv beside new rendered images (calibrate would not detect), or rendered images
+// beside new corners.csv (detect would use the old images).
+TEST_F(SimulateCli, RefusesToLeaveAnEarlierRunsCameraFilesStale) {
+  ASSERT_EQ(RunCtcal("--scenario full --seed 3 --duration 0.2 --images --out " + Dir("i")).code, 0);
+  test::CliRun r = RunCtcal("--scenario full --seed 4 --duration 0.2 --out " + Dir("i"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("cam0 holds an earlier --images run"), std::string::npos) << r.err;
+
+  ASSERT_EQ(RunCtcal("--scenario full --seed 3 --duration 0.2 --out " + Dir("c")).code, 0);
+  r = RunCtcal("--scenario full --seed 4 --duration 0.2 --images --out " + Dir("c"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cam0/corners.csv is from an earlier run"), std::string::npos) << r.err;
+  // The same kind of run again simply rewrites its files.
+  EXPECT_EQ(RunCtcal("--scenario full --seed 5 --duration 0.2 --out " + Dir("c")).code, 0);
 }
 
 TEST_F(SimulateCli, BadOptionsGiveOneClearLine) {
