@@ -9,6 +9,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "../apps/cli_test_util.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
