@@ -11,6 +11,7 @@
 
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "io_test_util.h"
 
 namespace ctcal {
 namespace {
@@ -30,16 +31,7 @@ void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
-// Finite doubles over every exponent range, from random bit patterns.
-double RandomDouble(std::mt19937_64& rng) {
-  while (true) {
-    const std::uint64_t bits = rng();
-    double x;
-    std::memcpy(&x, &bits, sizeof(x));
-    if (std::isfinite(x))
-      return x;
-  }
-}
+using test::RandomDouble;
 
 Eigen::Vector3d RandomVec(std::mt19937_64& rng) {
   return Eigen::Vector3d(RandomDouble(rng), RandomDouble(rng), RandomDouble(rng));

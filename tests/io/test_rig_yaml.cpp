@@ -12,6 +12,7 @@
 
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "io_test_util.h"
 
 namespace ctcal {
 namespace {
@@ -47,16 +48,7 @@ sensors:
     resolution: [640, 480]
 )";
 
-// Any finite double, drawn from its bit pattern so that every exponent range is exercised.
-double RandomDouble(std::mt19937_64& rng) {
-  while (true) {
-    const std::uint64_t bits = rng();
-    double x;
-    std::memcpy(&x, &bits, sizeof(x));
-    if (std::isfinite(x))
-      return x;
-  }
-}
+using test::RandomDouble;
 
 Eigen::Matrix3d RandomRotation(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
