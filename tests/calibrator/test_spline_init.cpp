@@ -93,15 +93,12 @@ TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
 // the calibrator: neither may change a bit of a pose. Checked on the guessed (table4) camera, as
 // the calibrator runs them.
 TEST(SplineInit, BoardViewsDoNotDependOnThreadsOrTheHandOver) {
-  const std::string dir = ::testing::TempDir() + "/ctcal_spline_init_22";
-  const std::string cmd = std::string(CTCAL_BINARY) +
-                          " simulate --scenario full --seed 22 --duration 3 --perturb table4 "
-                          "--out " +
-                          dir + " > /dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string dir = test::SimulateOnce("ctcal_spline_init_22_" + std::to_string(::getpid()),
+                                             test::FullTable4Args(22, 3.0));
   std::vector<std::string> warnings;
   const RigConfig rig = LoadRig(dir + "/rig.yaml", &warnings);
   const auto data = LoadDataset(dir, rig, &warnings);
+  std::filesystem::remove_all(dir);
   const Board board(rig.target);
   const auto same = [](const BoardView& a, const BoardView& b) {
     return a.t_ns == b.t_ns && a.T_C_W.matrix() == b.T_C_W.matrix() && a.corners == b.corners &&
