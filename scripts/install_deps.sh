@@ -14,7 +14,7 @@ PACKAGES=(
   libyaml-cpp-dev libcairo2-dev libpng-dev zlib1g-dev
   clang-format
   poppler-utils opencv-doc visp-images-data
-  chromium
+  chromium python3
 )
 
 missing=()

@@ -125,7 +125,106 @@ class DiscreteProblem {
     log_(Fmt("  gravity_W initialised to [%.4f, %.4f, %.4f]", g.x(), g.y(), g.z()));
   }
 
+  // The largest change of a sensor's time offset since the keyframes were chosen: the cameras'
+  // place the keyframes, the auxiliary sensors' anchor their intervals (at tau = t_k - offset)
+  // and bound the common time range.
+  double KeyframeDrift() const {
+    double drift = 0.0;
+    std::size_t i = 0;
+    for (const PreparedCamera& cam : prep_.cameras)
+      drift = std::max(drift, std::abs(cam.state->time_offset - offsets_at_keyframes_[i++]));
+    for (const AuxStates& a : aux_)
+      drift = std::max(drift, std::abs(a.in->state->time_offset - offsets_at_keyframes_[i++]));
+    return drift;
+  }
+
+  // Re-chooses the keyframes (RechooseKeyframes) when a time offset has moved by more than
+  // rechoose_keyframes_fraction of the A.1 window since they were chosen; says so, or returns
+  // empty.
+  std::string MaybeRechoose() {
+    const double drift = KeyframeDrift();
+    if (drift <= options_.rechoose_keyframes_fraction * options_.kinematic_window_s)
+      return {};
+    RechooseKeyframes();
+    ++rechoices_;
+    return Fmt("keyframes re-chosen: offsets moved %.2f ms", 1e3 * drift);
+  }
+
+  // Keyframes at the frame times of the current time offsets, with the current solution carried
+  // over from the old keyframes (the caller rebuilds the problem):
+  //  - base pose and velocity: the report's C2 interpolation of the old keyframe states
+  //    (KeyframeTrajectory: position quintic through p, v and the A.1 acceleration at both ends,
+  //    rotation cubic through the corrected rates), which follows the IMU's motion between
+  //    keyframes, where the geodesic A.2 errs by millimetres;
+  //  - biases: the old interval's, as its factors held them;
+  //  - auxiliary velocities: the rigid-body velocity of the interpolated base motion at the new
+  //    time plus the old state's deviation from it, linearly interpolated (the deviation is
+  //    smooth; the velocity itself changes by ~m/s^2 x 25 ms between keyframes). The old state k
+  //    sits at base time t_k + s, s the offset's change since the last build (AuxImuFunctor).
+  void RechooseKeyframes() {
+    problem_.reset();  // reads the old keyframes' memory
+    const std::vector<Keyframe> old = kf_;
+    std::vector<double> t_old;
+    for (const Keyframe& k : old)
+      t_old.push_back(k.t);
+    ImuIntrinsics* base = &*state_.base().imu;
+    const TrajectoryEvaluator motion =
+        KeyframeTrajectory(old, base, state_.gravity(), prep_.t0_ns, nullptr);
+    const auto kin_at = [&](double t) {
+      return motion(prep_.t0_ns + static_cast<std::int64_t>(std::llround(t * 1e9)), 1);
+    };
+    // The old keyframe whose interval holds t (clamped to the ends).
+    const auto interval_of = [&](double t) {
+      const auto it = std::upper_bound(t_old.begin(), t_old.end(), t);
+      return static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(
+          it - t_old.begin() - 1, 0, static_cast<std::ptrdiff_t>(t_old.size()) - 2));
+    };
+    std::vector<std::vector<Eigen::Vector3d>> deviation(aux_.size());
+    for (std::size_t i = 0; i < aux_.size(); ++i) {
+      const AuxStates& a = aux_[i];
+      const double s = a.in->state->time_offset - a.time_offset_at_build;
+      for (std::size_t k = 0; k < old.size(); ++k) {
+        const Se3Kinematics<double> kin = kin_at(old[k].t + s);
+        const Eigen::Vector3d rigid = kin.v_W + kin.R_W_B * kin.w_B.cross(a.in->state->p_B_S());
+        deviation[i].push_back(Eigen::Vector3d(a.v[k].data()) - rigid);
+      }
+    }
+
+    ChooseKeyframes();
+    for (Keyframe& k : kf_) {
+      const Se3Kinematics<double> kin = kin_at(k.t);
+      const Eigen::Quaterniond q(kin.R_W_B);
+      k.q_W_B = {q.x(), q.y(), q.z(), q.w()};
+      Eigen::Map<Eigen::Vector3d>(k.p_W_B.data()) = kin.p_W_B;
+      Eigen::Map<Eigen::Vector3d>(k.v_W.data()) = kin.v_W;
+      const Keyframe& from = old[interval_of(k.t)];
+      k.b_g = from.b_g;
+      k.b_a = from.b_a;
+    }
+    for (std::size_t i = 0; i < aux_.size(); ++i) {
+      AuxStates& a = aux_[i];
+      const double s = a.in->state->time_offset - a.time_offset_at_build;
+      const std::size_t n = kf_.size();
+      std::vector<std::array<double, 3>> v(n), bg(n), ba(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        const double t = kf_[k].t - s;  // on the old states' time axis
+        const std::size_t j = interval_of(t);
+        const double u = std::clamp((t - t_old[j]) / (t_old[j + 1] - t_old[j]), 0.0, 1.0);
+        const Se3Kinematics<double> kin = kin_at(kf_[k].t);
+        const Eigen::Vector3d v_k = kin.v_W + kin.R_W_B * kin.w_B.cross(a.in->state->p_B_S()) +
+                                    (1.0 - u) * deviation[i][j] + u * deviation[i][j + 1];
+        v[k] = {v_k.x(), v_k.y(), v_k.z()};
+        bg[k] = a.bg[j];
+        ba[k] = a.ba[j];
+      }
+      a.v = std::move(v);
+      a.bg = std::move(bg);
+      a.ba = std::move(ba);
+    }
+  }
+
   void Build(bool robust) {
+    robust_ = robust;
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_ = std::make_unique<ceres::Problem>(po);
@@ -177,11 +276,23 @@ class DiscreteProblem {
     spline_internal::BoundCameraParameters(prep_.cameras, &P);
   }
 
+  // The spline problem's solver settings (SplineProblem::Solve): Gauss-Newton steps from the
+  // start (trust region 1e8; every solve starts in the basin: the initial trajectory, then the
+  // previous solve's states), a relative cost change of 1e-6 for the robust solve (it only seeds
+  // the outlier gate), and the plain solves stop once a step would lower the cost by less than
+  // stop_cost_change (every scalar within sqrt(2 stop_cost_change) sigma of the converged one).
   ceres::Solver::Summary Solve() {
     spline_internal::IterationLogger logger(log_);
     ceres::Solver::Options so = spline_internal::SolverOptions(spline_options_, &logger);
+    so.initial_trust_region_radius = 1e8;
+    if (robust_)
+      so.function_tolerance = 1e-6;
+    else if (spline_options_.stop_cost_change > 0.0 && last_cost_ > 0.0)
+      so.function_tolerance =
+          std::max(so.function_tolerance, spline_options_.stop_cost_change / last_cost_);
     ceres::Solver::Summary summary;
     ceres::Solve(so, problem_.get(), &summary);
+    last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +
                                "): check the initial guesses and the noise settings");
@@ -189,8 +300,8 @@ class DiscreteProblem {
   }
 
   // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.
-  void RemoveOutliers(std::vector<CameraOutliers>* report) {
-    const double gate = -2.0 * std::log(1.0 - options_.outlier_probability);
+  void RemoveOutliers(double probability, std::vector<CameraOutliers>* report) {
+    const double gate = -2.0 * std::log(1.0 - probability);
     for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
       PreparedCamera& cam = prep_.cameras[c];
       CameraOutliers o;
@@ -230,6 +341,36 @@ class DiscreteProblem {
         changed += static_cast<int>(kf_.size());
     }
     return changed;
+  }
+
+  // RunStages' hooks (spline_problem_impl.h). Keyframes placed at the guessed time offsets are
+  // re-placed once the offsets have moved (the robust stage's corners stayed on the keyframes
+  // they were built with, through A.1 at the offset's change, so its outlier gate is unaffected);
+  // otherwise a rebuild while the offsets move residuals to other keyframes or interpolation.
+  void BeforePlainSolve() {
+    const std::string why = MaybeRechoose();
+    if (!why.empty())
+      log_("  " + why);
+  }
+  std::string NextRebuild() {
+    std::string why = MaybeRechoose();
+    if (why.empty()) {
+      const int changed = CountRebuild();
+      if (changed > 0)
+        why = std::to_string(changed) +
+              " residuals moved to other keyframes with the time offsets: rebuilt";
+    }
+    return why;
+  }
+  int Rechoices() const { return rechoices_; }
+
+  // Corners of the current problem read through A.1 and through A.2.
+  void CountInterpolation(int* kinematic, int* geodesic) const {
+    *kinematic = *geodesic = 0;
+    for (const auto& cam : corner_slots_) {
+      for (const auto& entry : cam)
+        ++(entry.second.kinematic ? *kinematic : *geodesic);
+    }
   }
 
   void Finish(SplineCalibrationResult* out) {
@@ -352,7 +493,7 @@ class DiscreteProblem {
       }
       std::sort(frames.begin(), frames.end());
       for (const double t : frames) {
-        if (!times.empty() && t - times.back() < options_.merge_s)
+        if (!times.empty() && t - times.back() < MergeSpacing())
           continue;
         if (!times.empty() && t - times.back() > options_.max_gap_s) {
           const double gap = t - times.back();
@@ -364,6 +505,11 @@ class DiscreteProblem {
         times.push_back(t);
       }
     }
+    offsets_at_keyframes_.clear();
+    for (const PreparedCamera& cam : prep_.cameras)
+      offsets_at_keyframes_.push_back(cam.state->time_offset);
+    for (const AuxStates& a : aux_)
+      offsets_at_keyframes_.push_back(a.in->state->time_offset);
     if (times.size() < 3)
       throw CalibrationInputError("too few keyframes (" + std::to_string(times.size()) +
                                   ") in the sensors' common time range");
@@ -381,6 +527,26 @@ class DiscreteProblem {
     log_(Fmt("  %.0f keyframes over %.3f s (mean spacing %.4f s)", static_cast<double>(kf_.size()),
              times.back() - times.front(),
              (times.back() - times.front()) / static_cast<double>(times.size() - 1)));
+  }
+
+  // Camera frames closer than this share a keyframe: merge_s, and at least 1.5 sample periods of
+  // every IMU, so that each preintegration interval holds a sample. An interval without one is
+  // a single integration step, whose [dv, dp] covariance has rank 3 (dp = dv h / 2 for the one
+  // reading): the whitening fails (seed 302 of the 5 s Monte Carlo, two frames 2.04 ms apart at
+  // 250 Hz). The later frame's corners are read through A.1 at up to that distance (6 ms at
+  // 250 Hz, where the midpoint A.1 errs by ~1e-6 rad).
+  double MergeSpacing() const {
+    double period = 0.0;
+    const auto longest = [&period](const std::vector<RawImuSample>& z) {
+      if (z.size() > 1)
+        period = std::max(period, (z.back().t - z.front().t) / static_cast<double>(z.size() - 1));
+    };
+    longest(base_samples_);
+    for (const AuxStates& a : aux_) {
+      if (a.in->state->config.type == SensorType::kImu)
+        longest(a.samples);
+    }
+    return std::max(options_.merge_s, 1.5 * period);
   }
 
   static RawImuSample RawAt(const std::vector<RawImuSample>& s, double t) {
@@ -654,6 +820,11 @@ class DiscreteProblem {
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<CornerSlot> slots_;
+  // Per camera, then per auxiliary sensor: the time offsets the keyframes were chosen with.
+  std::vector<double> offsets_at_keyframes_;
+  bool robust_ = false;
+  double last_cost_ = 0.0;  // of the last solve
+  int rechoices_ = 0;
   So3LeftManifold so3_left_;
   ceres::SphereManifold<3> sphere_;
 };
@@ -679,6 +850,7 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   so.min_corners_per_view = options.min_corners_per_view;
   so.min_views = options.min_views;
   so.compute_covariance = options.compute_covariance;
+  so.stop_cost_change = options.stop_cost_change;
 
   log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu +
       " (discrete, aux velocity " +
@@ -710,21 +882,14 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
     log(line);
     return s;
   };
-  dp.Build(true);
-  solve("[4/6] robust solve (Huber on the corners)");
-  dp.RemoveOutliers(&out.outliers);
-  spline_internal::LogOutliers(out.outliers, options.outlier_probability, log);
-  dp.Build(false);
-  ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
-  for (int round = 0; round < options.max_rebuild_rounds; ++round) {
-    const int changed = dp.CountRebuild();
-    if (changed == 0)
-      break;
-    log("  " + std::to_string(changed) +
-        " residuals moved to other keyframes with the time offsets: rebuilt");
-    dp.Build(false);
-    last = solve("  re-solve");
-  }
+  const ceres::Solver::Summary last = spline_internal::RunStages(
+      &dp, solve, options.outlier_probability, options.max_rebuild_rounds, log, &out.outliers);
+  out.keyframe_rechoices = dp.Rechoices();
+  out.num_keyframes = dp.NumKeyframes();
+  dp.CountInterpolation(&out.num_kinematic_corners, &out.num_geodesic_corners);
+  log(Fmt("  %.0f keyframes; corners interpolated by A.1: %.0f, by A.2: %.0f",
+          static_cast<double>(out.num_keyframes), static_cast<double>(out.num_kinematic_corners),
+          static_cast<double>(out.num_geodesic_corners)));
   out.iterations = iterations;
   out.solve_seconds = solve_seconds;
   out.seconds_per_iteration = iterations > 0 ? solve_seconds / iterations : 0.0;

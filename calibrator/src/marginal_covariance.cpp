@@ -104,20 +104,35 @@ MarginalInformation ComputeMarginalInformation(
     out.information = H_cc;
     return out;
   }
-  const SparseColMajor H_nn = H.topLeftCorner(n, n);
-  const Eigen::MatrixXd H_nc = Eigen::MatrixXd(H.topRightCorner(n, c));
+  // A nuisance state no residual touches (a trajectory or bias knot beyond the samples the data
+  // selection kept) has a zero diagonal, hence (H is PSD) a zero row and column: it carries no
+  // information and couples to nothing, so it is left out exactly instead of being damped.
+  std::vector<Eigen::Triplet<double>> select;
+  for (int i = 0; i < n; ++i) {
+    if (H.coeff(i, i) > 0.0)
+      select.emplace_back(i, static_cast<int>(select.size()), 1.0);
+  }
+  const int m = static_cast<int>(select.size());
+  SparseColMajor S(n, m);
+  S.setFromTriplets(select.begin(), select.end());
+  const SparseColMajor St = S.transpose();
+  const SparseColMajor H_nn = St * SparseColMajor(H.topLeftCorner(n, n)) * S;
+  const Eigen::MatrixXd H_nc = Eigen::MatrixXd(St * SparseColMajor(H.topRightCorner(n, c)));
 
-  // A nuisance state the data do not touch (e.g. a spline knot in a gap) makes H_nn singular;
-  // damping it by a tiny fraction of its scale marginalises such a state with a flat prior
-  // instead of failing, and the amount is reported.
+  // A combination of touched nuisance states the data do not determine makes H_nn singular;
+  // damping it by a tiny fraction of its scale marginalises it with a flat prior instead of
+  // failing, and the amount is reported.
   double max_diag = 0.0;
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < m; ++i)
     max_diag = std::max(max_diag, H_nn.coeff(i, i));
   Eigen::CholmodSupernodalLLT<SparseColMajor> llt;
+  // A failed attempt is handled (and reported) by the damping below; CHOLMOD's own message would
+  // only repeat it without context, so it stays silent (print level 0) and info() is checked.
+  llt.cholmod().print = 0;
   for (const double relative : {0.0, 1e-12, 1e-9, 1e-6}) {
     SparseColMajor damped = H_nn;
     if (relative > 0.0) {
-      SparseColMajor identity(n, n);
+      SparseColMajor identity(m, m);
       identity.setIdentity();
       damped += (relative * std::max(max_diag, 1.0)) * identity;
     }

@@ -389,6 +389,17 @@ class SplineProblem {
     return changed;
   }
 
+  // RunStages' hooks: nothing to do before the plain solve; a rebuild while the time offsets
+  // move residuals to other segments.
+  void BeforePlainSolve() {}
+  std::string NextRebuild() {
+    const int changed = CountRebucket();
+    return changed == 0 ? std::string()
+                        : std::to_string(changed) +
+                              " residuals moved to another spline segment with the time offsets: "
+                              "re-bucketed";
+  }
+
   void Finish(SplineCalibrationResult* out) {
     std::vector<CornerResiduals> corners;
     for (const PreparedCamera& cam : prep_.cameras) {
@@ -830,6 +841,33 @@ class SplineProblem {
   ceres::SphereManifold<3> sphere_;
 };
 
+// The solve stages of both calibrators on a problem type P (SplineProblem, the discrete
+// problem): robust solve, the outlier gate, P::BeforePlainSolve() (the discrete problem re-places
+// its keyframes there), the plain solve, then up to `max_rounds` rebuilds and re-solves while
+// P::NextRebuild() names a reason (after preparing the rebuild; empty: none needed).
+// `solve(title)` runs and logs one solve. Returns the last plain solve's summary.
+template <class P, class SolveFn>
+ceres::Solver::Summary RunStages(P* p, const SolveFn& solve, double outlier_probability,
+                                 int max_rounds, const CalibrationLog& log,
+                                 std::vector<CameraOutliers>* outliers) {
+  p->Build(true);
+  solve("[4/6] robust solve (Huber on the corners)");
+  p->RemoveOutliers(outlier_probability, outliers);
+  LogOutliers(*outliers, outlier_probability, log);
+  p->BeforePlainSolve();
+  p->Build(false);
+  ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
+  for (int round = 0; round < max_rounds; ++round) {
+    const std::string why = p->NextRebuild();
+    if (why.empty())
+      break;
+    log("  " + why);
+    p->Build(false);
+    last = solve("  re-solve");
+  }
+  return last;
+}
+
 // The whole pipeline for one spline type (stages 1-4 of spline_calibrator.h).
 template <int N, Se3Representation Rep>
 void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const CalibrationLog& log,
@@ -874,21 +912,8 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
     log(line);
     return s;
   };
-  sp.Build(true);
-  solve("[4/6] robust solve (Huber on the corners)");
-  sp.RemoveOutliers(options.outlier_probability, &out->outliers);
-  LogOutliers(out->outliers, options.outlier_probability, log);
-  sp.Build(false);
-  ceres::Solver::Summary last = solve("[5/6] final solve (plain L2)");
-  for (int round = 0; round < options.max_rebucket_rounds; ++round) {
-    const int changed = sp.CountRebucket();
-    if (changed == 0)
-      break;
-    log("  " + std::to_string(changed) +
-        " residuals moved to another spline segment with the time offsets: re-bucketed");
-    sp.Build(false);
-    last = solve("  re-solve");
-  }
+  const ceres::Solver::Summary last = RunStages(&sp, solve, options.outlier_probability,
+                                                options.max_rebucket_rounds, log, &out->outliers);
   out->iterations = iterations;
   out->solve_seconds = solve_seconds;
   out->seconds_per_iteration = iterations > 0 ? solve_seconds / iterations : 0.0;

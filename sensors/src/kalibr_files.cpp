@@ -63,13 +63,19 @@ ImuIntrinsics IntrinsicsOf(const SensorConfig& s) {
   return ImuIntrinsics::FromStored(s.imu_model, s.g_sensitivity, stored);
 }
 
-// Kalibr's model of an IMU and R_i_I, the rotation from our frame I to Kalibr's frame i.
-KalibrScaleMisalignment KalibrModelOf(const SensorConfig& s, Eigen::Matrix3d* R_i_I) {
-  if (s.imu_model == ImuModel::kNone) {
-    R_i_I->setIdentity();
+// Kalibr's model of an IMU, written in our frame I. SPEC fixes the files' IMU frame to ours
+// (`T_cam_imu = inverse(T_B_C)`), while Kalibr's canonical form (lower-triangular M's) lives in
+// its frame i = R_i_I I. Kalibr's equations hold in any frame: with a_i = R_i_I a_I,
+//   a_m = (M_a R_i_I) a_I,   w_m = M_g (C_gyro_i R_i_I) w_I + A (C_gyro_i R_i_I) a_I,
+// so M_a and C_gyro_i absorb R_i_I and the files stay exact (M_a is then full, not triangular).
+KalibrScaleMisalignment KalibrModelOf(const SensorConfig& s) {
+  if (s.imu_model == ImuModel::kNone)
     return {};
-  }
-  return ToKalibrScaleMisalignment(IntrinsicsOf(s), R_i_I);
+  Eigen::Matrix3d R_i_I;
+  KalibrScaleMisalignment k = ToKalibrScaleMisalignment(IntrinsicsOf(s), &R_i_I);
+  k.M_accel = k.M_accel * R_i_I;
+  k.C_gyro_i = k.C_gyro_i * R_i_I;
+  return k;
 }
 
 // The cameras in Kalibr's order: rig order, the base camera first in a camera-only rig.
@@ -95,15 +101,6 @@ std::vector<const SensorConfig*> KalibrImus(const RigConfig& rig) {
   return imus;
 }
 
-// T_B_b: Kalibr's reference frame b (frame i of the base IMU) in our B.
-Eigen::Matrix4d T_B_b(const RigConfig& rig) {
-  if (rig.IsCameraOnly())
-    return Eigen::Matrix4d::Identity();
-  Eigen::Matrix3d R_i_I;
-  KalibrModelOf(rig.Base(), &R_i_I);
-  return RotationOnly(R_i_I.transpose());
-}
-
 void Save(const std::string& text, const std::string& path) {
   std::ofstream f(path);
   if (!f)
@@ -119,7 +116,6 @@ std::string EmitKalibrCamchain(const RigConfig& rig,
                                const std::vector<std::vector<int>>& cam_overlaps) {
   const std::vector<const SensorConfig*> cams = KalibrCameras(rig);
   const bool camera_only = rig.IsCameraOnly();
-  const Eigen::Matrix4d T_B_b_ = T_B_b(rig);
   YAML::Emitter out;
   out << YAML::BeginMap;
   for (std::size_t n = 0; n < cams.size(); ++n) {
@@ -127,7 +123,7 @@ std::string EmitKalibrCamchain(const RigConfig& rig,
     out << YAML::Key << "cam" + std::to_string(n) << YAML::Value << YAML::BeginMap;
     if (!camera_only) {
       out << YAML::Key << "T_cam_imu" << YAML::Value;
-      EmitMatrix(out, Inverse(c.T_B_S) * T_B_b_);
+      EmitMatrix(out, Inverse(c.T_B_S));
     }
     if (n > 0) {
       out << YAML::Key << "T_cn_cnm1" << YAML::Value;
@@ -166,15 +162,13 @@ std::string EmitKalibrImu(const RigConfig& rig) {
   const std::vector<const SensorConfig*> imus = KalibrImus(rig);
   if (imus.empty())
     throw std::runtime_error("a camera-only rig has no imu.yaml");
-  const Eigen::Matrix4d T_B_b_ = T_B_b(rig);
   YAML::Emitter out;
   out << YAML::BeginMap;
   for (std::size_t k = 0; k < imus.size(); ++k) {
     const SensorConfig& s = *imus[k];
-    Eigen::Matrix3d R_i_I;
-    const KalibrScaleMisalignment m = KalibrModelOf(s, &R_i_I);
+    const KalibrScaleMisalignment m = KalibrModelOf(s);
     const Eigen::Matrix4d T_B_S = s.name == rig.base_imu ? Eigen::Matrix4d::Identity() : s.T_B_S;
-    const Eigen::Matrix4d T_i_b = RotationOnly(R_i_I) * Inverse(T_B_S) * T_B_b_;
+    const Eigen::Matrix4d T_i_b = Inverse(T_B_S);
     out << YAML::Key << "imu" + std::to_string(k) << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "T_i_b" << YAML::Value;
     EmitMatrix(out, T_i_b);

@@ -117,6 +117,34 @@ TEST(MarginalCovariance, EqualsBlockOfFullInverse) {
   EXPECT_TRUE(cov.null_directions.empty());
 }
 
+// A nuisance block no residual touches (a knot beyond the kept samples) has no information and
+// couples to nothing: the marginal information must be exactly that of the problem without it,
+// with no damping of the others.
+TEST(MarginalCovariance, UntouchedNuisanceBlockIsLeftOutExactly) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> gauss;
+  double x0[3] = {0, 0, 0}, x1[3] = {0, 0, 0}, y[2] = {0, 0}, unused[6] = {0, 0, 0, 0, 0, 0};
+  ceres::Problem with, without;
+  with.AddParameterBlock(unused, 6);
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Matrix<double, 4, 8> A;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 8; ++j)
+        A(i, j) = gauss(rng);
+    }
+    for (ceres::Problem* p : {&with, &without}) {
+      p->AddResidualBlock(new ceres::AutoDiffCostFunction<LinearResidual, 4, 3, 3, 2>(
+                              new LinearResidual(A, Eigen::Vector4d::Zero())),
+                          nullptr, x0, x1, y);
+    }
+  }
+  const std::vector<CalibrationBlock> calib = {{y, {"y[0]", "y[1]"}, {1.0, 1.0}}};
+  const MarginalInformation a = ComputeMarginalInformation(with, calib);
+  const MarginalInformation b = ComputeMarginalInformation(without, calib);
+  EXPECT_EQ(a.nuisance_damping, 0.0);
+  EXPECT_LT((a.information - b.information).norm(), 1e-12 * b.information.norm());
+}
+
 TEST(MarginalCovariance, NullDirectionMarksOnlyItsParameters) {
   // y[0] and y[1] are only seen as their sum; z is observed directly.
   double x[3] = {0, 0, 0}, y[2] = {0, 0}, z[1] = {0};

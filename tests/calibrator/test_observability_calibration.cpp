@@ -24,6 +24,7 @@
 #include "ctcal/sim/perturb.h"
 #include "ctcal/sim/scenario.h"
 #include "ctcal/sim/simulator.h"
+#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {
@@ -44,26 +45,18 @@ const Calibration& Calibrated(const std::string& scenario, double duration, std:
   const auto it = cache.find(key);
   if (it != cache.end())
     return it->second;
-  const RigConfig rig = sim::DefaultRig();
-  const auto motion = sim::MakeTrajectory(sim::ParseScenario(scenario), sim::SceneFor(rig.target));
-  const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(rig));
-  sim::SimOptions options;
-  options.duration = duration;
-  options.seed = seed;
-  const sim::SimulatedDataset data = sim::Simulate(rig, traj, options);
-  sim::Random rng = sim::Random(seed).Fork(sim::kPerturbationStream);
-  const RigConfig guess = sim::PerturbRig(rig, sim::Perturbation::kTable4, rng);
+  const SimulatedRecording rec = SimulateTable4(sim::ParseScenario(scenario), duration, seed);
   SplineCalibratorOptions calib;
   calib.threads = 2;
   Calibration r;
-  r.truth = data.truth;
+  r.truth = rec.truth;
   const auto quiet = [](const std::string&) {};
   if (method == Method::kDiscrete) {
     DiscreteCalibratorOptions discrete;
     discrete.threads = 2;
-    r.out = CalibrateDiscrete(guess, sim::ToSensorData(data), discrete, quiet);
+    r.out = CalibrateDiscrete(rec.guess, rec.data, discrete, quiet);
   } else {
-    r.out = CalibrateSpline(guess, sim::ToSensorData(data), calib, quiet);
+    r.out = CalibrateSpline(rec.guess, rec.data, calib, quiet);
   }
   // The initial trajectory spline's span for both methods (the one the calibrators scale by).
   r.duration_s = (r.out.num_knots - calib.order + 1) * r.out.knot_spacing_s;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <random>
 
+#include "ctcal/sensors/imu_intrinsics.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
 
@@ -26,13 +27,20 @@ Eigen::Matrix4d Pose(std::mt19937& rng) {
   return T;
 }
 
-Eigen::Matrix4d ReadMatrix4(const YAML::Node& node) {
-  Eigen::Matrix4d T;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c)
+template <int N>
+Eigen::Matrix<double, N, N> ReadMatrix(const YAML::Node& node) {
+  Eigen::Matrix<double, N, N> T;
+  for (int r = 0; r < N; ++r) {
+    for (int c = 0; c < N; ++c)
       T(r, c) = node[r][c].as<double>();
   }
   return T;
+}
+Eigen::Matrix4d ReadMatrix4(const YAML::Node& node) {
+  return ReadMatrix<4>(node);
+}
+Eigen::Matrix3d ReadMatrix3(const YAML::Node& node) {
+  return ReadMatrix<3>(node);
 }
 
 RigConfig VisualInertialRig(ImuModel base_model, std::uint32_t seed) {
@@ -165,6 +173,42 @@ TEST(KalibrFiles, CalibratedImuRigRoundTrips) {
 
 TEST(KalibrFiles, ScaleMisalignedBaseImuRoundTripsWithItsFrames) {
   ExpectKalibrRoundTrip(VisualInertialRig(ImuModel::kImu2, 3), "scale_misalignment");
+}
+
+// SPEC 1: T_cam_imu = inverse(T_B_C) with B the base IMU's frame I (here imu2: its gyroscope
+// frame), even when Kalibr's canonical frame (accelerometer x axis) differs from it; imu.yaml's
+// scale-misalignment equations then hold in I:
+//   a_m = M_a a_I + b_a,   w_m = M_g C_gyro_i w_I + A C_gyro_i a_I + b_g,
+// and must give our model's raw readings to rounding.
+TEST(KalibrFiles, ScaleMisalignedBaseKeepsSpecFramesAndKalibrEquations) {
+  const RigConfig rig = VisualInertialRig(ImuModel::kImu2, 5);
+  const SensorConfig& imu0 = *rig.Find("imu0");
+  const YAML::Node chain = YAML::Load(EmitKalibrCamchain(rig));
+  for (const char* cam : {"cam0", "cam1"})
+    EXPECT_TRUE(
+        ReadMatrix4(chain[cam]["T_cam_imu"]).isApprox(rig.Find(cam)->T_B_S.inverse(), 1e-12))
+        << cam;
+  const YAML::Node imu = YAML::Load(EmitKalibrImu(rig))["imu0"];
+  const Eigen::Matrix3d M_a = ReadMatrix3(imu["accelerometers"]["M"]);
+  const Eigen::Matrix3d M_g = ReadMatrix3(imu["gyroscopes"]["M"]);
+  const Eigen::Matrix3d A = ReadMatrix3(imu["gyroscopes"]["A"]);
+  const Eigen::Matrix3d C = ReadMatrix3(imu["gyroscopes"]["C_gyro_i"]);
+  StoredImuIntrinsics stored;
+  stored.Dw = imu0.D_w;
+  stored.Da = imu0.D_a;
+  stored.Tg = imu0.T_g;
+  stored.rotation = imu0.R_I_a;
+  const ImuIntrinsics ours = ImuIntrinsics::FromStored(imu0.imu_model, imu0.g_sensitivity, stored);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector3d w_I(n(rng), n(rng), n(rng)), a_I(3 * n(rng), 3 * n(rng), 9.81 + n(rng));
+    Eigen::Vector3d w_m, a_m;
+    ours.RawFromTrue(w_I, a_I, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), &w_m, &a_m);
+    // The file's numbers are printed to ~1e-10 relative.
+    EXPECT_LT((M_a * a_I - a_m).norm(), 1e-8 * a_m.norm());
+    EXPECT_LT((M_g * C * w_I + A * C * a_I - w_m).norm(), 1e-8 * (w_m.norm() + 1.0));
+  }
 }
 
 TEST(KalibrFiles, CameraOnlyRigWritesCamchainWithChainedPoses) {

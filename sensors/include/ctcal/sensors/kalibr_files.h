@@ -4,19 +4,21 @@
 // camchain-imucam.yaml (rig with IMUs) / camchain.yaml (camera-only rig): `cam0`, `cam1`, ... in
 // rig order (a camera-only rig puts its base camera first), each with camera_model, intrinsics,
 // distortion_model, distortion_coeffs, resolution, rostopic, cam_overlaps and
-//   T_cam_imu         = T_C_b = inverse(T_B_C) expressed in Kalibr's IMU frame b (below),
+//   T_cam_imu         = inverse(T_B_C) (SPEC section 1, B our base frame; below),
 //   timeshift_cam_imu = time_offset (t_imu = t_cam + shift, SPEC section 2),
 //   T_cn_cnm1         = T_Cn_B * T_B_Cn-1 (cameras n > 0).
 // imu.yaml: `imu0` (the base), `imu1`, ... with T_i_b, time_offset, Kalibr's noise keys,
 // update_rate, rostopic and the model: `calibrated` for model none, else `scale-misalignment`
 // with gyroscopes {M, A, C_gyro_i} and accelerometers {M} (kalibr_imu_model.h).
 //
-// Frames: Kalibr's IMU frame i of a scale-misaligned IMU keeps the accelerometer's x axis, ours
-// (upper-triangular D) a triad's z axis; ToKalibrScaleMisalignment returns the rotation R_i_I
-// between them, and every Kalibr transform is written in Kalibr's frames: b = i of imu0, so
-// T_cam_imu = inverse(T_B_C) * T_B_b and T_i_b = T_i_S * inverse(T_B_S) * T_B_b. With model
-// `none` (Kalibr's `calibrated`) i = I and nothing changes. Gyroscope-only sensors have no Kalibr
-// counterpart and are not written.
+// Frames: SPEC fixes the transforms to our frames: T_cam_imu = inverse(T_B_C), T_i_b =
+// inverse(T_B_S) (i = our frame I of that IMU, b = B). Kalibr's canonical frame of a
+// scale-misaligned IMU keeps the accelerometer's x axis (lower-triangular M's), ours a triad's z
+// axis; Kalibr's equations hold in any frame, so imu.yaml writes them in I: M_a and C_gyro_i
+// absorb the rotation R_i_I between the two (M_a is then full), M_g and A are Kalibr's. Reading
+// accepts either (any invertible M; kalibr_imu_model.h), so Kalibr's own files import too. With
+// model `none` (Kalibr's `calibrated`) i = I. Gyroscope-only sensors have no Kalibr counterpart
+// and are not written.
 #pragma once
 
 #include <string>

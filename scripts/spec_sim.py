@@ -1,0 +1,710 @@
+#!/usr/bin/env python3
+"""An independent SPEC dataset writer: a simulated multi-sensor rig waved in front of a board.
+
+Written from shared/SPEC.md alone (none of ctcal's simulator or sensor code is read or imported),
+so that a convention shared by ctcal's simulator and its calibrator but contrary to SPEC (a time
+offset's sign, T_B_S against T_S_B, an IMU model's order of operations, gravity's sign, a
+distortion's parameter order, a quaternion's order, the rolling-shutter row time, a CSV unit) shows
+up as a calibration that misses the truth. Python 3 standard library only.
+
+Writes DATA/<sensor>/data.csv (inertial), DATA/<camera>/corners.csv, DATA/<sensor>/biases.csv,
+DATA/groundtruth/data.csv, DATA/truth.yaml and DATA/rig.yaml (a coarse, hand-made guess: focal
+lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centimetres off, time
+offsets 0, IMU intrinsics at their defaults).
+
+    python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--aux-model imu2]
+        [--gyro-model upper] [--target aprilgrid|checkerboard] [--rolling-shutter]
+        [--max-offset-ms 10]
+"""
+
+import argparse
+import math
+import os
+import random
+import sys
+import time
+
+# --------------------------------------------------------------------------------------------
+# 3-vectors and 3x3 matrices as plain lists.
+
+
+def add(a, b):
+    return [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+
+
+def sub(a, b):
+    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+
+def scale(s, a):
+    return [s * a[0], s * a[1], s * a[2]]
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def norm(a):
+    return math.sqrt(dot(a, a))
+
+
+def mv(m, v):
+    return [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
+
+
+def mtv(m, v):
+    """m^T v."""
+    return [m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2] for i in range(3)]
+
+
+def mm(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def tr(m):
+    return [[m[j][i] for j in range(3)] for i in range(3)]
+
+
+def eye():
+    return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+
+
+def inv3(m):
+    a, b, c = m[0]
+    d, e, f = m[1]
+    g, h, i = m[2]
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return [[(e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det],
+            [(f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det],
+            [(d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det]]
+
+
+def rot_x(c):
+    return [[1.0, 0.0, 0.0], [0.0, math.cos(c), -math.sin(c)], [0.0, math.sin(c), math.cos(c)]]
+
+
+def rot_y(b):
+    return [[math.cos(b), 0.0, math.sin(b)], [0.0, 1.0, 0.0], [-math.sin(b), 0.0, math.cos(b)]]
+
+
+def rot_z(a):
+    return [[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]]
+
+
+def exp_so3(w):
+    """Rodrigues: the rotation by |w| radians about w."""
+    th = norm(w)
+    if th < 1e-12:
+        return eye()
+    k = scale(1.0 / th, w)
+    K = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]]
+    K2 = mm(K, K)
+    s, c = math.sin(th), 1.0 - math.cos(th)
+    return [[(1.0 if i == j else 0.0) + s * K[i][j] + c * K2[i][j] for j in range(3)]
+            for i in range(3)]
+
+
+def log_so3(R):
+    c = max(-1.0, min(1.0, (R[0][0] + R[1][1] + R[2][2] - 1.0) / 2.0))
+    th = math.acos(c)
+    v = [R[2][1] - R[1][2], R[0][2] - R[2][0], R[1][0] - R[0][1]]
+    if th < 1e-9:
+        return scale(0.5, v)
+    return scale(th / (2.0 * math.sin(th)), v)
+
+
+def quat_wxyz(R):
+    """Hamilton quaternion (w, x, y, z) of a rotation matrix, w >= 0."""
+    t = R[0][0] + R[1][1] + R[2][2]
+    if t > 0.0:
+        s = 2.0 * math.sqrt(t + 1.0)
+        q = [0.25 * s, (R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s]
+    elif R[0][0] > R[1][1] and R[0][0] > R[2][2]:
+        s = 2.0 * math.sqrt(1.0 + R[0][0] - R[1][1] - R[2][2])
+        q = [(R[2][1] - R[1][2]) / s, 0.25 * s, (R[0][1] + R[1][0]) / s, (R[0][2] + R[2][0]) / s]
+    elif R[1][1] > R[2][2]:
+        s = 2.0 * math.sqrt(1.0 + R[1][1] - R[0][0] - R[2][2])
+        q = [(R[0][2] - R[2][0]) / s, (R[0][1] + R[1][0]) / s, 0.25 * s, (R[1][2] + R[2][1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2][2] - R[0][0] - R[1][1])
+        q = [(R[1][0] - R[0][1]) / s, (R[0][2] + R[2][0]) / s, (R[1][2] + R[2][1]) / s, 0.25 * s]
+    return q if q[0] >= 0.0 else [-x for x in q]
+
+
+def upper_from6(d):
+    """SPEC 3: an upper-triangular matrix stored column-wise [d11, d12, d22, d13, d23, d33]."""
+    return [[d[0], d[1], d[3]], [0.0, d[2], d[4]], [0.0, 0.0, d[5]]]
+
+
+def full_from9(d):
+    return [d[0:3], d[3:6], d[6:9]]
+
+
+def gauss3(rng, s):
+    return [rng.gauss(0.0, s), rng.gauss(0.0, s), rng.gauss(0.0, s)]
+
+
+def random_rotation(rng, max_deg):
+    axis = gauss3(rng, 1.0)
+    return exp_so3(scale(math.radians(max_deg) * rng.uniform(0.6, 1.0) / norm(axis), axis))
+
+
+# --------------------------------------------------------------------------------------------
+# The trajectory T_W_B(t): position and ZYX Euler angles as sums of sinusoids, with closed-form
+# derivatives, R_W_B(t) = R_W_B0 * Rz(a) * Ry(b) * Rx(c).
+#
+# With Q = Rz(a) Ry(b) Rx(c), Q^T Q' = [Rx^T Ry^T e3 a' + Rx^T e2 b' + e1 c']_x, so the body rate is
+#   w_B = (c' - a' sin b,  a' sin c cos b + b' cos c,  a' cos c cos b - b' sin c)
+# and its derivative (the body angular acceleration; d/dt w_W = R_W_B d/dt w_B since w x w = 0)
+# follows by the product rule.
+
+
+class Sinusoids:
+    def __init__(self, rng, amplitude, freqs):
+        self.terms = [(amplitude * rng.uniform(0.5, 1.0) / len(freqs), 2.0 * math.pi * f,
+                       rng.uniform(0.0, 2.0 * math.pi)) for f in freqs]
+
+    def eval(self, t):
+        """Value, first and second derivative."""
+        x = dx = ddx = 0.0
+        for a, w, ph in self.terms:
+            s, c = math.sin(w * t + ph), math.cos(w * t + ph)
+            x += a * s
+            dx += a * w * c
+            ddx -= a * w * w * s
+        return x, dx, ddx
+
+
+class Trajectory:
+    def __init__(self, rng, p0, R0, pos_amp, rot_amp):
+        self.p0, self.R0 = p0, R0
+        self.pos = [Sinusoids(rng, pos_amp, [rng.uniform(0.2, 0.5), rng.uniform(0.6, 1.1)])
+                    for _ in range(3)]
+        self.ang = [Sinusoids(rng, rot_amp, [rng.uniform(0.15, 0.45), rng.uniform(0.5, 0.9)])
+                    for _ in range(3)]
+
+    def position(self, t):
+        """p_W_B, v_W_B, acc_W_B."""
+        e = [s.eval(t) for s in self.pos]
+        return (add(self.p0, [x[0] for x in e]), [x[1] for x in e], [x[2] for x in e])
+
+    def rotation(self, t):
+        """R_W_B, w_B, alpha_B (body-frame angular velocity and acceleration)."""
+        (a, da, dda), (b, db, ddb), (c, dc, ddc) = [s.eval(t) for s in self.ang]
+        sb, cb, sc, cc = math.sin(b), math.cos(b), math.sin(c), math.cos(c)
+        R = mm(self.R0, mm(rot_z(a), mm(rot_y(b), rot_x(c))))
+        w = [dc - da * sb, da * sc * cb + db * cc, da * cc * cb - db * sc]
+        alpha = [ddc - dda * sb - da * cb * db,
+                 dda * sc * cb + da * (cc * dc * cb - sc * sb * db) + ddb * cc - db * sc * dc,
+                 dda * cc * cb - da * (sc * dc * cb + cc * sb * db) - ddb * sc - db * cc * dc]
+        return R, w, alpha
+
+
+def self_check(traj):
+    """The closed-form derivatives against central differences (a wrong sign here would be a
+    wrong dataset, not a wrong calibrator)."""
+    h = 1e-5
+    for t in (0.3, 1.7, 4.2):
+        R, w, alpha = traj.rotation(t)
+        Rp, wp, _ = traj.rotation(t + h)
+        Rm, wm, _ = traj.rotation(t - h)
+        w_fd = scale(1.0 / (2.0 * h), sub(log_so3(mm(tr(R), Rp)), log_so3(mm(tr(R), Rm))))
+        a_fd = scale(1.0 / (2.0 * h), sub(wp, wm))
+        p, v, acc = traj.position(t)
+        pp, vp, _ = traj.position(t + h)
+        pm, vm, _ = traj.position(t - h)
+        v_fd = scale(1.0 / (2.0 * h), sub(pp, pm))
+        acc_fd = scale(1.0 / (2.0 * h), sub(vp, vm))
+        for name, x, y in (("w_B", w, w_fd), ("alpha_B", alpha, a_fd), ("v_W", v, v_fd),
+                           ("acc_W", acc, acc_fd)):
+            if norm(sub(x, y)) > 1e-6 * (1.0 + norm(x)):
+                raise RuntimeError("trajectory self-check failed for %s at t=%g: %s vs %s" %
+                                   (name, t, x, y))
+
+
+# --------------------------------------------------------------------------------------------
+# Targets (SPEC 5).
+
+
+def aprilgrid(cols, rows, size, spacing):
+    """Corner id -> position, and the tags as lists of 4 corner ids."""
+    points = {}
+    for r in range(2 * rows):
+        for c in range(2 * cols):
+            x = (c // 2) * (1.0 + spacing) * size + (c % 2) * size
+            y = (r // 2) * (1.0 + spacing) * size + (r % 2) * size
+            points[r * 2 * cols + c] = [x, y, 0.0]
+    tags = []
+    for k in range(cols * rows):
+        b = 2 * (k // cols) * 2 * cols + 2 * (k % cols)
+        tags.append([b, b + 1, b + 2 * cols + 1, b + 2 * cols])
+    return points, tags
+
+
+def checkerboard(cols, rows, row_spacing, col_spacing):
+    points = {r * cols + c: [r * row_spacing, c * col_spacing, 0.0]
+              for r in range(rows) for c in range(cols)}
+    return points, [sorted(points)]  # a checkerboard is detected whole or not at all
+
+
+# --------------------------------------------------------------------------------------------
+# Cameras (SPEC 4): pinhole projection of the normalised point, then the distortion, in Kalibr's
+# parameter orders.
+
+
+def project(cam, p_C):
+    if p_C[2] < 0.05:
+        return None
+    x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
+    k = cam["distortion_coeffs"]
+    if cam["distortion_model"] == "radtan":
+        k1, k2, r1, r2 = k
+        rr = x * x + y * y
+        radial = 1.0 + k1 * rr + k2 * rr * rr
+        xd = x * radial + 2.0 * r1 * x * y + r2 * (rr + 2.0 * x * x)
+        yd = y * radial + r1 * (rr + 2.0 * y * y) + 2.0 * r2 * x * y
+    elif cam["distortion_model"] == "equidistant":
+        r = math.sqrt(x * x + y * y)
+        if r < 1e-12:
+            xd, yd = x, y
+        else:
+            th = math.atan(r)
+            th2 = th * th
+            thd = th * (1.0 + k[0] * th2 + k[1] * th2 ** 2 + k[2] * th2 ** 3 + k[3] * th2 ** 4)
+            xd, yd = x * thd / r, y * thd / r
+    else:
+        xd, yd = x, y
+    fu, fv, pu, pv = cam["intrinsics"]
+    return fu * xd + pu, fv * yd + pv
+
+
+# --------------------------------------------------------------------------------------------
+# Inertial sensors (SPEC 3). A sensor's truth gives T_w = D_w^-1, T_a = D_a^-1, its rotation and
+# T_g; the raw readings are
+#   w_m = T_w R_w_I w_I + T_g a_I + b_g + n_g,   a_m = T_a R_a_I a_I + b_a + n_a
+# with R_w_I = R_I_w^T (imu1) and R_a_I = R_I_a^T (imu2), identity otherwise.
+
+
+def inertial_matrices(s):
+    model = s["model"]
+    if s["type"] == "gyro":
+        Dw = upper_from6(s["Dw"]) if model == "upper" else (
+            full_from9(s["Dw"]) if model == "full" else eye())
+        return inv3(Dw), None, None
+    Dw = full_from9(s["Dw"]) if model == "imu3" else (
+        eye() if model == "none" else upper_from6(s["Dw"]))
+    Da = full_from9(s["Da"]) if model == "imu4" else (
+        eye() if model == "none" else upper_from6(s["Da"]))
+    R_w_I = tr(s["R_I_w"]) if model == "imu1" else eye()
+    R_a_I = tr(s["R_I_a"]) if model == "imu2" else eye()
+    g = s.get("g_sensitivity", "none")
+    if g == "full":
+        Tg = full_from9(s["Tg"])
+    elif g == "upper":
+        Tg = upper_from6(s["Tg"])
+    else:
+        Tg = [[0.0] * 3 for _ in range(3)]
+    return mm(inv3(Dw), R_w_I), mm(inv3(Da), R_a_I), Tg
+
+
+def random_upper6(rng, scale_err, skew):
+    return [1.0 + rng.uniform(-scale_err, scale_err), rng.uniform(-skew, skew),
+            1.0 + rng.uniform(-scale_err, scale_err), rng.uniform(-skew, skew),
+            rng.uniform(-skew, skew), 1.0 + rng.uniform(-scale_err, scale_err)]
+
+
+def random_full9(rng, scale_err, skew):
+    return [1.0 + rng.uniform(-scale_err, scale_err) if i % 4 == 0 else rng.uniform(-skew, skew)
+            for i in range(9)]
+
+
+def imu_truth(rng, model, noise, T_B_S=None, offset=None):
+    s = {"type": "imu", "model": model, "noise": noise}
+    if model != "none":
+        s["Dw"] = random_full9(rng, 0.01, 0.005) if model == "imu3" else random_upper6(
+            rng, 0.01, 0.005)
+        s["Da"] = random_full9(rng, 0.01, 0.005) if model == "imu4" else random_upper6(
+            rng, 0.01, 0.005)
+        s["g_sensitivity"] = "full"
+        s["Tg"] = [rng.uniform(-1e-3, 1e-3) for _ in range(9)]
+        if model == "imu1":
+            s["R_I_w"] = random_rotation(rng, 1.0)
+        if model == "imu2":
+            s["R_I_a"] = random_rotation(rng, 1.0)
+    if T_B_S is not None:
+        s["T_B_S"], s["time_offset"] = T_B_S, offset
+    return s
+
+
+# --------------------------------------------------------------------------------------------
+# Files. Our own layout choices where SPEC leaves them open: EuRoC-style CSV headers with units,
+# readings in %.10g, YAML numbers as Python's shortest round-trip repr, block-style YAML with the
+# keys in an order of our own.
+
+
+def fmt(x):
+    return repr(float(x))
+
+
+def yaml_value(v):
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(yaml_value(x) for x in v) + "]"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    return fmt(v)
+
+
+def transform(R, t):
+    return [R[0] + [t[0]], R[1] + [t[1]], R[2] + [t[2]], [0.0, 0.0, 0.0, 1.0]]
+
+
+SENSOR_KEY_ORDER = ["type", "time_offset", "T_B_S", "model", "camera_model", "resolution",
+                    "intrinsics", "distortion_model", "distortion_coeffs", "line_delay",
+                    "g_sensitivity", "Dw", "Da", "Tg", "R_I_a", "R_I_w", "noise", "estimate"]
+
+
+def write_rig(path, comment, base, gravity_magnitude, target, sensors, gravity_W=None):
+    lines = ["# " + comment, "sensors:"]
+    for name, s in sensors.items():
+        lines.append("  %s:" % name)
+        for key in SENSOR_KEY_ORDER:
+            if key not in s:
+                continue
+            v = s[key]
+            if key == "noise":
+                lines.append("    noise:")
+                lines += ["      %s: %s" % (k, yaml_value(x)) for k, x in v.items()]
+            elif key in ("T_B_S", "R_I_a", "R_I_w"):
+                lines.append("    %s:" % key)
+                lines += ["      - %s" % yaml_value(row) for row in v]
+            else:
+                lines.append("    %s: %s" % (key, yaml_value(v)))
+    lines.append("target:")
+    lines += ["  %s: %s" % (k, yaml_value(v)) for k, v in target.items()]
+    if gravity_W is not None:
+        lines.append("gravity_W: %s" % yaml_value(gravity_W))
+    lines.append("gravity_magnitude: %s" % fmt(gravity_magnitude))
+    lines.append("base_imu: %s" % base)
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def stamps(t0_ns, duration, rate):
+    period_ns = int(round(1e9 / rate))
+    return [t0_ns + k * period_ns for k in range(int(duration * rate) + 1)]
+
+
+def rotation_translation(T):
+    return [row[:3] for row in T[:3]], [row[3] for row in T[:3]]
+
+
+def body_state(traj, t):
+    p, v, acc = traj.position(t)
+    R, w, alpha = traj.rotation(t)
+    return p, v, acc, R, w, alpha
+
+
+# --------------------------------------------------------------------------------------------
+# The rig: the truth of every sensor, in the order the files list them (not ours: cameras first,
+# the base last).
+
+BASE, AUX, GYRO, CAM_L, CAM_R = "body", "aux_imu", "fog", "left", "right"
+
+
+def make_target(kind):
+    """Kalibr's target description, corner id -> position, and the corner groups a detector
+    finds whole."""
+    if kind == "aprilgrid":
+        return ({"target_type": "aprilgrid", "tagCols": 7, "tagRows": 5, "tagSize": 0.06,
+                 "tagSpacing": 0.25},) + aprilgrid(7, 5, 0.06, 0.25)
+    return ({"target_type": "checkerboard", "targetCols": 7, "targetRows": 6,
+             "rowSpacingMeters": 0.07, "colSpacingMeters": 0.06},) + checkerboard(7, 6, 0.07, 0.06)
+
+
+def make_rig(rng, args):
+    """The sensors' truth and the left camera's pose R_B_L, t_B_L."""
+    # Cameras: the left one looks along B's x axis (x_C = -y_B, y_C = -z_B); the right one, a
+    # fisheye 11 cm to its right, looks 35 deg further right, so that the board sweeps its outer
+    # field (Kannala-Brandt's k2..k4 are determined only by corners far off the axis).
+    R_B_L = mm([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]], random_rotation(rng, 2.0))
+    t_B_L = [0.045 + rng.uniform(-0.01, 0.01), 0.03, -0.015]
+    R_B_R = mm(R_B_L, exp_so3([0.004, math.radians(35.0), 0.003]))
+    t_B_R = add(t_B_L, mv(R_B_L, [0.11, 0.002, -0.001]))
+
+    def offset(sign):
+        return sign * args.max_offset_ms * 1e-3 * rng.uniform(0.35, 1.0)
+
+    left = {"type": "camera", "camera_model": "pinhole", "resolution": [640, 480],
+            "intrinsics": [412.0 + rng.uniform(-5, 5), 414.0 + rng.uniform(-5, 5),
+                           322.5 + rng.uniform(-4, 4), 236.0 + rng.uniform(-4, 4)],
+            "distortion_model": "radtan",
+            "distortion_coeffs": [-0.28 + rng.uniform(-0.02, 0.02), 0.075, 2.1e-4, -1.4e-4],
+            "T_B_S": transform(R_B_L, t_B_L), "time_offset": offset(1.0),
+            "noise": {"pixel_sigma": 0.5},
+            "estimate": ["intrinsics", "extrinsics", "time_offset"]}
+    right = {"type": "camera", "camera_model": "pinhole", "resolution": [640, 512],
+             "intrinsics": [215.0 + rng.uniform(-5, 5), 214.0 + rng.uniform(-5, 5),
+                            322.0 + rng.uniform(-4, 4), 258.0 + rng.uniform(-4, 4)],
+             "distortion_model": "equidistant",
+             "distortion_coeffs": [-0.012 + rng.uniform(-0.003, 0.003), 0.021, -0.018, 0.0045],
+             "T_B_S": transform(R_B_R, t_B_R), "time_offset": offset(-1.0),
+             "line_delay": 25e-6 if args.rolling_shutter else 0.0,
+             "noise": {"pixel_sigma": 0.5},
+             "estimate": ["intrinsics", "extrinsics", "time_offset"] +
+             (["line_delay"] if args.rolling_shutter else [])}
+    imu_noise = {"update_rate": 200.0, "gyroscope_noise_density": 1.6e-4,
+                 "gyroscope_random_walk": 2.0e-6, "accelerometer_noise_density": 2.0e-3,
+                 "accelerometer_random_walk": 3.0e-5}
+    aux_noise = {"update_rate": 250.0, "gyroscope_noise_density": 2.4e-4,
+                 "gyroscope_random_walk": 4.0e-6, "accelerometer_noise_density": 2.8e-3,
+                 "accelerometer_random_walk": 6.0e-5}
+    gyro_noise = {"update_rate": 400.0, "gyroscope_noise_density": 5.0e-5,
+                  "gyroscope_random_walk": 1.0e-6}
+    base = imu_truth(rng, "imu2", imu_noise)
+    base["estimate"] = ["intrinsics"]
+    aux = imu_truth(rng, args.aux_model, aux_noise,
+                    transform(mm(rot_z(math.radians(90.0)), random_rotation(rng, 5.0)),
+                              [-0.04, 0.06 + rng.uniform(-0.01, 0.01), 0.02]), offset(-1.0))
+    # SPEC 3: a `none` model has no intrinsics to estimate.
+    aux["estimate"] = ["extrinsics", "time_offset"] + (
+        [] if args.aux_model == "none" else ["intrinsics"])
+    gyro = {"type": "gyro", "model": args.gyro_model, "noise": gyro_noise,
+            "T_B_S": transform(mm(rot_x(math.radians(180.0)), random_rotation(rng, 4.0)),
+                               [0.02, -0.05, 0.01]), "time_offset": offset(1.0)}
+    if args.gyro_model == "upper":
+        gyro["Dw"] = random_upper6(rng, 0.01, 0.005)
+    elif args.gyro_model == "full":
+        # Its frame is the one D_w fixes and its rotation may not be estimated (SPEC 3): T_B_S
+        # keeps the mounting rotation, D_w carries scale and misalignment only.
+        gyro["Dw"] = random_full9(rng, 0.01, 0.005)
+    gyro["estimate"] = (["time_offset"] if args.gyro_model == "full" else
+                        ["extrinsics", "time_offset"]) + (
+        [] if args.gyro_model == "none" else ["intrinsics"])
+    return {CAM_R: right, GYRO: gyro, CAM_L: left, AUX: aux, BASE: base}, R_B_L, t_B_L
+
+
+# --------------------------------------------------------------------------------------------
+# The recordings.
+
+
+def write_inertial(out, name, s, traj, g_W, t0_ns, duration, rng, groundtruth):
+    """DATA/<name>/data.csv and biases.csv (and, with `groundtruth`, DATA/groundtruth/data.csv)
+    of an imu or gyro sensor `s`."""
+    with_accel = s["type"] == "imu"
+    rate = s["noise"]["update_rate"]
+    os.makedirs(os.path.join(out, name), exist_ok=True)
+    Mw, Ma, Tg = inertial_matrices(s)
+    nz = s["noise"]
+    R_B_S, t_B_S = rotation_translation(s["T_B_S"]) if "T_B_S" in s else (eye(), [0.0] * 3)
+    off = s.get("time_offset", 0.0)
+    dt = 1.0 / rate
+    # SPEC 3 (Kalibr's densities): a sample's white noise has sigma density * sqrt(rate); a bias
+    # walks by random_walk * sqrt(dt) per step.
+    sg = nz["gyroscope_noise_density"] * math.sqrt(rate)
+    sbg = nz["gyroscope_random_walk"] * math.sqrt(dt)
+    bg = gauss3(rng, 0.01)
+    ba = []
+    if with_accel:
+        sa = nz["accelerometer_noise_density"] * math.sqrt(rate)
+        sba = nz["accelerometer_random_walk"] * math.sqrt(dt)
+        ba = gauss3(rng, 0.08)
+    rows, brows, gt = [], [], []
+    for st in stamps(t0_ns, duration, rate):
+        t = (st - t0_ns) * 1e-9 + off  # SPEC 2: taken at base time t_S + time_offset
+        p, v, acc, R, w_B, alpha_B = body_state(traj, t)
+        w_S = mtv(R_B_S, w_B)
+        # Specific force at the sensor's origin p_W_B + R_W_B t_B_S, in the sensor's frame:
+        # a_S = R_B_S^T (R_W_B^T (acc_W - g_W) + alpha_B x t_B_S + w_B x (w_B x t_B_S)).
+        f_B = add(mtv(R, sub(acc, g_W)),
+                  add(cross(alpha_B, t_B_S), cross(w_B, cross(w_B, t_B_S))))
+        a_S = mtv(R_B_S, f_B)
+        reading = add(add(mv(Mw, w_S), bg), gauss3(rng, sg))
+        if with_accel:
+            reading = add(reading, mv(Tg, a_S)) + add(add(mv(Ma, a_S), ba), gauss3(rng, sa))
+        rows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in reading)))
+        brows.append("%d,%s\n" % (st, ",".join("%.10g" % x for x in bg + ba)))
+        if groundtruth:
+            q = quat_wxyz(R)
+            gt.append("%d,%s\n" % (st, ",".join("%.12g" % x for x in p + q + v + bg + ba)))
+        bg = add(bg, gauss3(rng, sbg))
+        if with_accel:
+            ba = add(ba, gauss3(rng, sba))
+    with open(os.path.join(out, name, "data.csv"), "w") as f:
+        if with_accel:
+            f.write("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],"
+                    "w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],"
+                    "a_RS_S_z [m s^-2]\n")
+        else:
+            f.write("#timestamp [ns],w_x [rad/s],w_y [rad/s],w_z [rad/s]\n")
+        f.writelines(rows)
+    with open(os.path.join(out, name, "biases.csv"), "w") as f:
+        f.write("#timestamp [ns],bw_x,bw_y,bw_z" + (",ba_x,ba_y,ba_z\n" if with_accel else "\n"))
+        f.writelines(brows)
+    if groundtruth:
+        os.makedirs(os.path.join(out, "groundtruth"), exist_ok=True)
+        with open(os.path.join(out, "groundtruth", "data.csv"), "w") as f:
+            f.write("#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z,"
+                    "bw_x,bw_y,bw_z,ba_x,ba_y,ba_z\n")
+            f.writelines(gt)
+
+
+def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, rng,
+                  per_corner_sigma):
+    """DATA/<name>/corners.csv; returns (frames, corners, image cells of a 4x4 grid covered)."""
+    os.makedirs(os.path.join(out, name), exist_ok=True)
+    R_B_C, t_B_C = rotation_translation(cam["T_B_S"])
+    width, height = cam["resolution"]
+    ld = cam.get("line_delay", 0.0)
+    lines, frames, n, cells = [], 0, 0, set()
+
+    def camera_pose(t):
+        """R_W_C, p_W_C at base time t."""
+        p, _, _, R, _, _ = body_state(traj, t)
+        return mm(R, R_B_C), add(p, mv(R, t_B_C))
+
+    for st in stamps(t0_ns + 25000000, duration - 0.05, rate):
+        t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
+        pose_at_stamp = camera_pose(t_img)
+        frame = []
+        for group in groups:
+            seen = []
+            for cid in group:
+                # SPEC 2: row v is read at t_S + v * line_delay; v depends on the pose at that
+                # time, so iterate (a contraction: line_delay * |dv/dt| << 1).
+                R_W_C, p_W_C = pose_at_stamp
+                uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                for _ in range(8 if ld > 0.0 else 0):
+                    if uv is None:
+                        break
+                    v_row = uv[1]
+                    R_W_C, p_W_C = camera_pose(t_img + v_row * ld)
+                    uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
+                    if uv is not None and abs(uv[1] - v_row) < 1e-6:
+                        break
+                if uv is None or not (2.0 <= uv[0] <= width - 3.0 and
+                                      2.0 <= uv[1] <= height - 3.0):
+                    break
+                seen.append((cid, uv))
+            if len(seen) == len(group):
+                frame += seen
+        if len(frame) < 8:
+            continue
+        frames += 1
+        n += len(frame)
+        for cid, (u, v) in frame:
+            cells.add((int(4 * u / width), int(4 * v / height)))
+            if per_corner_sigma:
+                s = rng.choice([0.3, 0.5, 0.8])
+                lines.append("%d,%d,%.4f,%.4f,%.2f\n" % (st, cid, u + rng.gauss(0.0, s),
+                                                         v + rng.gauss(0.0, s), s))
+            else:
+                s = cam["noise"]["pixel_sigma"]
+                lines.append("%d,%d,%.4f,%.4f\n" % (st, cid, u + rng.gauss(0.0, s),
+                                                    v + rng.gauss(0.0, s)))
+    with open(os.path.join(out, name, "corners.csv"), "w") as f:
+        f.write("#timestamp [ns],corner_id,u [px],v [px]" +
+                (",sigma [px]\n" if per_corner_sigma else "\n"))
+        f.writelines(lines)
+    return frames, n, len(cells)
+
+
+def coarse_guess(truth, rng):
+    """A hand-made guess: focal lengths 3-5 % off with fu = fv and the image centre, no
+    distortion, rotations 2.4-4 deg and lever arms 1-3 cm per axis off, offsets 0, IMU intrinsics
+    left to their defaults."""
+    guess = {}
+    for name, s in truth.items():
+        s = dict(s)
+        if s["type"] == "camera":
+            f = 1.0 + rng.choice([-1.0, 1.0]) * rng.uniform(0.03, 0.05)
+            w, h = s["resolution"]
+            s["intrinsics"] = [round(s["intrinsics"][0] * f), round(s["intrinsics"][0] * f),
+                               (w - 1) / 2.0, (h - 1) / 2.0]
+            s["distortion_coeffs"] = [0.0] * 4
+            if "line_delay" in s:
+                s["line_delay"] = 0.0
+        else:
+            for key in ("Dw", "Da", "Tg", "R_I_a", "R_I_w"):
+                s.pop(key, None)  # defaults: identity / zero
+        if "T_B_S" in s:
+            R, t = rotation_translation(s["T_B_S"])
+            if not (s["type"] == "gyro" and s["model"] == "full"):
+                R = mm(random_rotation(rng, 4.0), R)
+                t = add(t, [rng.choice([-1.0, 1.0]) * rng.uniform(0.01, 0.03) for _ in range(3)])
+            s["T_B_S"] = transform(R, t)
+            s["time_offset"] = 0.0
+        guess[name] = s
+    return guess
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--duration", type=float, default=18.0)
+    ap.add_argument("--aux-model", default="imu2", choices=["none", "imu1", "imu2", "imu3", "imu4"])
+    ap.add_argument("--gyro-model", default="upper", choices=["none", "upper", "full"])
+    ap.add_argument("--target", default="aprilgrid", choices=["aprilgrid", "checkerboard"])
+    ap.add_argument("--rolling-shutter", action="store_true",
+                    help="the fisheye reads its rows 25 us apart")
+    ap.add_argument("--max-offset-ms", type=float, default=10.0)
+    ap.add_argument("--cam-rate", type=float, default=20.0)
+    args = ap.parse_args()
+    wall = time.time()
+    rng = random.Random(args.seed)
+    out = args.out
+    os.makedirs(out, exist_ok=True)
+    t0_ns = 1700000000123456789  # unix-epoch-like stamps, as real recordings have
+    g_mag = 9.80665
+
+    target, points, groups = make_target(args.target)
+    xs = [p[0] for p in points.values()]
+    ys = [p[1] for p in points.values()]
+    centre = [0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)), 0.0]
+    # The board hangs on a tilted wall: gravity mostly along the board's +y (its rows go down).
+    gdir = [rng.uniform(-0.2, 0.2), 1.0, rng.uniform(-0.3, 0.3)]
+    g_W = scale(g_mag / norm(gdir), gdir)
+    truth, R_B_L, t_B_L = make_rig(rng, args)
+
+    # The motion: the left camera looks at the board's centre from 0.75 m in front (the board's
+    # -z side, so that the board's x and y read as the image's u and v).
+    R_W_B0 = tr(R_B_L)
+    p_W_B0 = sub([centre[0], centre[1], -0.75], mv(R_W_B0, t_B_L))
+    traj = Trajectory(rng, p_W_B0, R_W_B0, pos_amp=0.22, rot_amp=0.45)
+    self_check(traj)
+
+    for name in (BASE, AUX, GYRO):
+        write_inertial(out, name, truth[name], traj, g_W, t0_ns, args.duration, rng,
+                       groundtruth=name == BASE)
+    stats = {}
+    for name in (CAM_L, CAM_R):  # the left camera writes the optional sigma column
+        stats[name] = write_corners(out, name, truth[name], traj, points, groups, t0_ns,
+                                    args.duration, args.cam_rate, rng, name == CAM_L)
+
+    write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
+              BASE, g_mag, target, truth, gravity_W=g_W)
+    write_rig(os.path.join(out, "rig.yaml"),
+              "coarse hand-made guess written by scripts/spec_sim.py", BASE, g_mag, target,
+              coarse_guess(truth, rng))
+
+    cameras = ", ".join("%s %d frames %d corners %d/16 image cells" % ((k,) + v)
+                        for k, v in stats.items())
+    print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s; %s; %.1f s" % (
+        out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
+        ", rolling shutter" if args.rolling_shutter else "", cameras, time.time() - wall))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
