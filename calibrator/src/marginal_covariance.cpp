@@ -67,11 +67,11 @@ MarginalInformation ComputeMarginalInformation(
 
   // H = J^T J accumulated over chunks of residual blocks: the whole Jacobian (and its transpose)
   // of a long recording would hold hundreds of MB at once (docs/performance.md, memory). A chunk
-  // holds at most kChunkValues Jacobian values (32 MB; ~4000 camera-frame or IMU-sample blocks,
-  // ~300 compressed inertial blocks of 1 kHz data).
+  // holds at most kChunkValues Jacobian values (16 MB; ~2000 camera-frame or 5000 IMU-sample
+  // blocks, ~150 compressed inertial blocks of 1 kHz data).
   const int n = out.nuisance_dimension;
   const int c = static_cast<int>(units.size());
-  constexpr std::size_t kChunkValues = std::size_t{1} << 22;
+  constexpr std::size_t kChunkValues = std::size_t{1} << 21;
   const auto jacobian_values = [&](ceres::ResidualBlockId id) {
     const ceres::CostFunction* f = problem.GetCostFunctionForResidualBlock(id);
     std::size_t cols = 0;

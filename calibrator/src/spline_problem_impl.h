@@ -735,7 +735,10 @@ class SplineProblem {
   // The manifold a residual lifts a shared block's Jacobian with (the left rotations), nullptr
   // for the others (gravity's Jacobian is the plain ambient one).
   const ceres::Manifold* LiftedManifold(double* block) const {
-    return problem_->GetManifold(block) == &so3_left_ ? &so3_left_ : nullptr;
+    // Bias knots enter the problem with their first residual: not known to it yet, Euclidean.
+    return problem_->HasParameterBlock(block) && problem_->GetManifold(block) == &so3_left_
+               ? &so3_left_
+               : nullptr;
   }
   int CommonRank(double* block, int size) const {
     return LiftedManifold(block) != nullptr ? 3 : size;
