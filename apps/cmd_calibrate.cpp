@@ -253,8 +253,16 @@ int RunCalibrate(int argc, char** argv) {
            {"config.max_iterations", std::to_string(options.max_iterations)}})
     run_info.emplace_back(key, value);
 
-  if (rig.IsCameraOnly())
+  if (rig.IsCameraOnly()) {
+    // SPEC section 7: a rig without IMUs is a camera calibration (per-frame board poses); the
+    // spline and the discrete trajectory models do not apply, so say that --method is unused.
+    if (method != "spline") {
+      log("note: --method " + method +
+          " does not apply to a rig without IMUs: calibrating the cameras alone (one result, "
+          "solver.method camera_only)");
+    }
     return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info);
+  }
   if (method != "spline") {
     discrete_options.threads = options.threads;
     discrete_options.max_iterations = options.max_iterations;

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +12,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/targets/detector.h"
 
@@ -50,42 +50,16 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
         }
       });
 
-  std::vector<CornerObservation> corners;
-  size_t with_board = 0, unreadable = 0, total_corners = 0;
-  std::map<RejectReason, size_t> rejected;
-  std::string first_error;
-  for (size_t i = 0; i < results.size(); ++i) {
-    const DetectionResult& r = results[i];
-    if (!r.error.empty()) {
-      ++unreadable;
-      if (first_error.empty())
-        first_error = r.error;
-      continue;
-    }
-    for (const TagRejection& rejection : r.rejected)
-      ++rejected[rejection.reason];
-    if (!r.board_found)
-      continue;
-    ++with_board;
-    total_corners += r.corners.size();
-    for (const DetectedCorner& c : r.corners) {
-      CornerObservation o;
-      o.t_ns = images[i].t_ns;
-      o.corner_id = c.id;
-      o.u = c.uv.x();
-      o.v = c.uv.y();
-      o.sigma = c.sigma;
-      corners.push_back(o);
-    }
-  }
-  if (unreadable == results.size())
-    return cli.InputError("no image of " + camera + " could be read (" + first_error + ")");
+  CameraDetectionSummary found;
+  const std::vector<CornerObservation> corners = CornersFromDetections(images, results, &found);
+  if (found.unreadable == results.size())
+    return cli.InputError("no image of " + camera + " could be read (" + found.first_error + ")");
 
   std::printf("%s: %zu images, %zu with the board, %.1f corners per image with the board",
-              camera.c_str(), results.size(), with_board,
-              with_board > 0 ? static_cast<double>(total_corners) / with_board : 0.0);
-  if (unreadable > 0)
-    std::printf(", %zu unreadable (first: %s)", unreadable, first_error.c_str());
+              camera.c_str(), results.size(), found.with_board,
+              found.with_board > 0 ? static_cast<double>(corners.size()) / found.with_board : 0.0);
+  if (found.unreadable > 0)
+    std::printf(", %zu unreadable (first: %s)", found.unreadable, found.first_error.c_str());
   std::printf("\n");
   // What a rejection counts: AprilGrid rules drop tags; checkerboard and ChArUco rules drop
   // corners, except ChArUco's marker rules (ids not on the board, duplicates).
@@ -100,13 +74,14 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
       return "markers";
     return "corners";
   };
-  for (const auto& [reason, count] : rejected)
+  for (const auto& [reason, count] : found.rejected)
     std::printf("  rejected: %zu %s (%s)\n", count, noun(reason), ToString(reason));
-  if (with_board == 0) {
+  if (found.with_board == 0) {
     std::string hint = "check the target file";
-    if (rejected.count(RejectReason::kUnknownId) || rejected.count(RejectReason::kNotThisBoard))
+    if (found.rejected.count(RejectReason::kUnknownId) ||
+        found.rejected.count(RejectReason::kNotThisBoard))
       hint = "ids beyond this board were seen: a larger board, or the wrong target file?";
-    else if (rejected.count(RejectReason::kBadBorder))
+    else if (found.rejected.count(RejectReason::kBadBorder))
       hint = "tags with another border width were seen: check blackTagBorder";
     return cli.RunFailed("no board found in any image of " + camera + " (" + hint + ")");
   }

@@ -1,7 +1,10 @@
 // `ctcal report --out OUT` (SPEC section 8): re-renders OUT/report.html and OUT/report.pdf of a
-// finished calibration folder with report/report.h (the same function calibrate calls).
+// finished calibration folder with report/report.h (the same function calibrate calls); for a
+// `calibrate --method both` folder, the reports of OUT/spline/ and OUT/discrete/.
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -14,7 +17,8 @@ int RunReport(int argc, char** argv) {
   namespace po = boost::program_options;
   CommandLine cli("report", "--out OUT [--png-dir DIR]",
                   "Re-render the calibration report (OUT/report.html and OUT/report.pdf) of a "
-                  "folder written by ctcal calibrate.");
+                  "folder written by ctcal calibrate (of OUT/spline/ and OUT/discrete/ for "
+                  "--method both).");
   std::string out_dir, png_dir;
   cli.options().add_options()("out", po::value(&out_dir)->required(),
                               "calibration folder holding result.yaml and report_data/")(
@@ -24,18 +28,30 @@ int RunReport(int argc, char** argv) {
   report::ReportOptions options;
   options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
   options.png_dir = png_dir;
-  report::ReportOutput out;
-  try {
-    out = report::RenderReport(out_dir, options);
-  } catch (const std::exception& e) {
-    return cli.InputError(e.what());
+  // `--method both` keeps no result at the top, one full result per method below it (issue 8).
+  std::vector<std::string> folders;
+  if (!std::filesystem::exists(out_dir + "/result.yaml")) {
+    for (const char* method : {"/spline", "/discrete"}) {
+      if (std::filesystem::exists(out_dir + method + "/result.yaml"))
+        folders.push_back(out_dir + method);
+    }
   }
-  int fails = 0;
-  for (const auto& c : out.checks)
-    fails += c.status == report::Status::kFail;
-  std::printf("wrote %s and %s (%d pages, %zu figures, %zu sections omitted, %d checks failed)\n",
-              out.html_path.c_str(), out.pdf_path.c_str(), out.pdf_pages, out.figure_ids.size(),
-              out.omitted.size(), fails);
+  if (folders.empty())
+    folders.push_back(out_dir);
+  for (const std::string& folder : folders) {
+    report::ReportOutput out;
+    try {
+      out = report::RenderReport(folder, options);
+    } catch (const std::exception& e) {
+      return cli.InputError(e.what());
+    }
+    int fails = 0;
+    for (const auto& c : out.checks)
+      fails += c.status == report::Status::kFail;
+    std::printf("wrote %s and %s (%d pages, %zu figures, %zu sections omitted, %d checks failed)\n",
+                out.html_path.c_str(), out.pdf_path.c_str(), out.pdf_pages, out.figure_ids.size(),
+                out.omitted.size(), fails);
+  }
   return kExitOk;
 }
 

@@ -43,6 +43,32 @@ std::string CheckOutputFolder(const std::string& out) {
   return "";
 }
 
+// A camera file of an earlier run into the same folder that this run would not rewrite, and
+// what it would silently do: corners.csv beside rendered images is taken instead of detecting
+// them; images and corners_true.csv beside fresh corners.csv belong to another motion. Empty when
+// none.
+std::string StaleCameraFile(const std::string& out, const RigConfig& rig, bool images) {
+  namespace fs = std::filesystem;
+  for (const SensorConfig& s : rig.sensors) {
+    if (s.type != SensorType::kCamera)
+      continue;
+    const fs::path dir = fs::path(out) / s.name;
+    std::error_code ec;
+    if (images && fs::exists(dir / "corners.csv")) {
+      return (dir / "corners.csv").string() +
+             " is from an earlier run and --images does not rewrite it (calibrate would take it "
+             "instead of detecting the new images): remove it or write to a new folder";
+    }
+    if (!images && (fs::exists(dir / "corners_true.csv") ||
+                    (fs::is_directory(dir / "data") && !fs::is_empty(dir / "data", ec)))) {
+      return dir.string() +
+             " holds an earlier --images run (data/, corners_true.csv) that this run does not "
+             "rewrite (detect would use those images): remove them or write to a new folder";
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 int RunSimulate(int argc, char** argv) {
@@ -105,6 +131,8 @@ int RunSimulate(int argc, char** argv) {
     return cli.InputError(e.what());
   }
   if (const std::string why = CheckOutputFolder(out); !why.empty())
+    return cli.InputError(why);
+  if (const std::string why = StaleCameraFile(out, rig, images); !why.empty())
     return cli.InputError(why);
 
   const auto start = std::chrono::steady_clock::now();

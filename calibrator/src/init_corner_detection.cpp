@@ -28,6 +28,34 @@ std::string NoBoardHint(const std::map<RejectReason, std::size_t>& rejected) {
 
 }  // namespace
 
+std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntry>& images,
+                                                     const std::vector<DetectionResult>& results,
+                                                     CameraDetectionSummary* summary) {
+  CameraDetectionSummary& s = *summary;
+  s.images = images.size();
+  s.unreadable = s.with_board = s.corners = 0;
+  s.rejected.clear();
+  s.first_error.clear();
+  std::vector<CornerObservation> corners;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const DetectionResult& r = results[i];
+    if (!r.error.empty()) {
+      if (s.unreadable++ == 0)
+        s.first_error = r.error;  // names the file
+      continue;
+    }
+    for (const TagRejection& rejection : r.rejected)
+      ++s.rejected[rejection.reason];
+    if (!r.board_found)
+      continue;
+    ++s.with_board;
+    for (const DetectedCorner& c : r.corners)
+      corners.push_back({images[i].t_ns, c.id, c.uv.x(), c.uv.y(), c.sigma});
+  }
+  s.corners = corners.size();
+  return corners;
+}
+
 std::vector<CornerObservation> DetectCameraCorners(
     const std::string& camera, const Detector& detector, const std::string& image_dir,
     const std::vector<ImageEntry>& images, CameraDetectionSummary* summary, const InitLog& log) {
@@ -57,23 +85,7 @@ std::vector<CornerObservation> DetectCameraCorners(
       });
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::vector<CornerObservation> corners;
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const DetectionResult& r = results[i];
-    if (!r.error.empty()) {
-      if (s.unreadable++ == 0)
-        s.first_error = r.error;  // names the file
-      continue;
-    }
-    for (const TagRejection& rejection : r.rejected)
-      ++s.rejected[rejection.reason];
-    if (!r.board_found)
-      continue;
-    ++s.with_board;
-    for (const DetectedCorner& c : r.corners)
-      corners.push_back({images[i].t_ns, c.id, c.uv.x(), c.uv.y(), c.sigma});
-  }
-  s.corners = corners.size();
+  const std::vector<CornerObservation> corners = CornersFromDetections(images, results, &s);
   if (s.unreadable == s.images)
     throw InitError(kStage, camera, "no image could be read (first: " + s.first_error + ")");
   if (s.with_board == 0)

@@ -169,6 +169,28 @@ std::string ValueSigma(double v, const std::optional<double>& sigma) {
 // ------------------------------------------------------------------------------ the document
 
 // One section: HTML body parts and PDF figures in order.
+// The image plane of a W x H camera as axes: pixel centres at integers (SPEC section 2), so the
+// image spans [-0.5, W - 0.5] x [-0.5, H - 0.5]; v grows downwards and pixels are square.
+void ImageAxes(double W, double H, XYPlot* p) {
+  p->x_label = "u [px]";
+  p->y_label = "v [px]";
+  p->equal_aspect = true;
+  p->y_down = true;
+  p->x_min = -0.5;
+  p->x_max = W - 0.5;
+  p->y_min = -0.5;
+  p->y_max = H - 0.5;
+}
+
+void ImageAxes(double W, double H, HeatMap* hm) {
+  hm->x_lo = -0.5;
+  hm->x_hi = W - 0.5;
+  hm->y_lo = -0.5;
+  hm->y_hi = H - 0.5;
+  hm->x_label = "u [px]";
+  hm->y_label = "v [px]";
+}
+
 struct Section {
   Section(std::string id_, std::string heading_)
       : id(std::move(id_)), heading(std::move(heading_)) {}
@@ -686,24 +708,12 @@ class Builder {
                        1, 2);
     auto& p = f->Add<XYPlot>();
     p.title = "reference -> model pixel, arrows x" + FormatNumber(scale, 3);
-    p.x_label = "u [px]";
-    p.y_label = "v [px]";
-    p.equal_aspect = true;
-    p.y_down = true;
-    p.x_min = -0.5;
-    p.x_max = W - 0.5;
-    p.y_min = -0.5;
-    p.y_max = H - 0.5;
+    ImageAxes(W, H, &p);
     p.Arrows(x0, y0, dx, dy, PaletteColor(0));
     auto& hm = f->Add<HeatMap>();
     hm.title = "|displacement| (grey: outside the model's field of view)";
     hm.values = d.magnitude;
-    hm.x_lo = -0.5;
-    hm.x_hi = W - 0.5;
-    hm.y_lo = -0.5;
-    hm.y_hi = H - 0.5;
-    hm.x_label = "u [px]";
-    hm.y_label = "v [px]";
+    ImageAxes(W, H, &hm);
     hm.value_label = "px";
     sec->html += "<p class=\"note\">Distortion field: the reference is " + Escape(d.reference) +
                  ", focal " + FormatNumber(d.focal.x(), 5) + " / " + FormatNumber(d.focal.y(), 5) +
@@ -770,15 +780,8 @@ class Builder {
       auto f = NewFigure("fig-" + s.name + "-image", s.name + ": over the image", 1, 2);
       auto& cov = f->Add<XYPlot>();
       cov.title = "coverage (" + std::to_string(ou.size()) + " outliers removed, red)";
-      cov.x_label = "u [px]";
-      cov.y_label = "v [px]";
+      ImageAxes(W, H, &cov);
       cov.value_label = "image index";
-      cov.equal_aspect = true;
-      cov.y_down = true;
-      cov.x_min = -0.5;
-      cov.x_max = W - 0.5;
-      cov.y_min = -0.5;
-      cov.y_max = H - 0.5;
       cov.ScatterByValue(u, v, frame, 1.2);
       if (!ou.empty())
         cov.Scatter(ou, ov, "outliers", kFail, 2.5);
@@ -794,12 +797,7 @@ class Builder {
       auto& hm = f->Add<HeatMap>();
       hm.title = "mean |error| per cell (grey: no corners)";
       hm.values = (n.array() > 0).select(sum.array() / n.array(), kNaN);
-      hm.x_lo = -0.5;
-      hm.x_hi = W - 0.5;
-      hm.y_lo = -0.5;
-      hm.y_hi = H - 0.5;
-      hm.x_label = "u [px]";
-      hm.y_label = "v [px]";
+      ImageAxes(W, H, &hm);
       hm.value_label = "px";
       sec.figures.push_back(f);
     }

@@ -47,9 +47,34 @@ std::string Cell(double x) {
   return buf;
 }
 
+// The truth re-expressed with `base` (one of its sensors) as frame B and reference clock, so that
+// a result with another base (a camera-only calibration of a visual-inertial rig) is compared
+// in its own frames: T_base_S = T_B_base^-1 T_B_S, and with t_B = t_S + time_offset_S,
+// t_base = t_B - time_offset_base, so time_offset'_S = time_offset_S - time_offset_base.
+RigConfig Rebased(const RigConfig& truth, const std::string& base) {
+  if (truth.base_imu == base)
+    return truth;
+  const SensorConfig* new_base = truth.Find(base);
+  if (!new_base) {
+    throw std::runtime_error("the result's base '" + base +
+                             "' is not a sensor of the truth (base '" + truth.base_imu +
+                             "'): their T_B_S are in different frames");
+  }
+  const Eigen::Matrix4d T_base_B = new_base->T_B_S.inverse();
+  const double base_offset = new_base->time_offset;
+  RigConfig out = truth;
+  out.base_imu = base;
+  for (SensorConfig& s : out.sensors) {
+    s.T_B_S = s.name == base ? Eigen::Matrix4d::Identity() : Eigen::Matrix4d(T_base_B * s.T_B_S);
+    s.time_offset = s.name == base ? 0.0 : s.time_offset - base_offset;
+  }
+  return out;
+}
+
 }  // namespace
 
-Comparison CompareRigs(const RigConfig& truth, const RigConfig& result) {
+Comparison CompareRigs(const RigConfig& truth_in, const RigConfig& result) {
+  const RigConfig truth = Rebased(truth_in, result.base_imu);
   Comparison c;
   const bool compare_gravity = truth.gravity_W.has_value() && result.gravity_W.has_value();
   Eigen::Vector3d dtheta = Eigen::Vector3d::Zero();

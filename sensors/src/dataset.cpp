@@ -68,8 +68,17 @@ class CsvFile {
         header_columns_ = static_cast<int>(SplitFields(line.substr(1)).size());
         continue;
       }
-      if (Trim(line).empty())
+      // Blank lines at the end of a file (as some writers leave them) end it; one followed by a
+      // row is an error at the blank line.
+      if (Trim(line).empty()) {
+        if (blank_line_no_ == 0)
+          blank_line_no_ = line_no_;
+        continue;
+      }
+      if (blank_line_no_ != 0) {
+        line_no_ = blank_line_no_;
         Fail("empty line (a dataset file has one row per line, no blank lines)");
+      }
       *fields = SplitFields(line);
       return true;
     }
@@ -146,6 +155,7 @@ class CsvFile {
   std::string path_;
   std::ifstream in_;
   int line_no_ = 0;
+  int blank_line_no_ = 0;  // the first blank line, 0 while there is none
   int header_columns_ = 0;
 };
 

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -42,6 +43,16 @@ int DistortionCount(const std::string& distortion_model) {
 }
 
 namespace {
+
+// Motion windows are seconds in memory and integer nanoseconds in files (SPEC section 2). The
+// division is correctly rounded, so whole and half seconds read back exactly.
+double SecondsFromNs(std::int64_t ns) {
+  return static_cast<double>(ns) / 1e9;
+}
+
+std::int64_t NsFromSeconds(double s) {
+  return static_cast<std::int64_t>(std::llround(s * 1e9));
+}
 
 const std::set<std::string> kImuNoiseKeys = {"gyroscope_noise_density", "gyroscope_random_walk",
                                              "accelerometer_noise_density",
@@ -99,7 +110,9 @@ void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineO
 class RigReader {
  public:
   RigReader(const std::string& file, std::vector<std::string>* warnings)
-      : in_(file), warnings_(warnings) {}
+      : in_(file), warnings_(warnings) {
+    in_.SetWarn([this](const std::string& line) { Emit(line); });
+  }
 
   RigConfig Read(const YAML::Node& root) {
     if (!root.IsMap())
@@ -209,8 +222,9 @@ class RigReader {
     }
   }
 
-  void Warn(const std::string& what) {
-    const std::string line = in_.file() + ": warning: " + what;
+  void Warn(const std::string& what) { Emit(in_.file() + ": warning: " + what); }
+
+  void Emit(const std::string& line) {
     if (warnings_)
       warnings_->push_back(line);
     else
@@ -257,17 +271,21 @@ class RigReader {
         kind = "a sensor of type camera";
         break;
     }
-    if (is_base) {
-      for (const char* key : {"T_B_S", "time_offset"}) {
-        if (node[key]) {
-          in_.Fail(node[key], where,
-                   std::string(key) +
-                       " is not allowed on the base sensor (its frame is B, its "
-                       "clock the reference)");
-        }
-      }
-    } else {
-      allowed.insert({"T_B_S", "time_offset"});
+    allowed.insert({"T_B_S", "time_offset"});
+    // SPEC section 7 lists T_B_S and time_offset for "all but the base"; a writer that spells
+    // out the base's definition (identity, 0) is read, anything else is an error
+    // (docs/conventions.md, "SPEC read twice").
+    if (is_base && node["T_B_S"] &&
+        in_.Rigid(node["T_B_S"], where + ".T_B_S") != Eigen::Matrix4d::Identity()) {
+      in_.Fail(node["T_B_S"], where,
+               "T_B_S is not allowed on the base sensor other than as the identity (its frame "
+               "is B)");
+    }
+    if (is_base && node["time_offset"] &&
+        in_.FiniteDouble(node["time_offset"], where + ".time_offset") != 0.0) {
+      in_.Fail(node["time_offset"], where,
+               "time_offset is not allowed on the base sensor other than as 0 (its clock is the "
+               "reference)");
     }
     in_.CheckKeys(node, where, allowed, kind);
 
@@ -498,6 +516,18 @@ class RigReader {
     std::set<std::string> allowed;
     for (const ParameterKey& k : keys)
       allowed.insert(k.key);
+    // SPEC section 7 splits T_B_S into R_B_S and t_B_S for every sensor. A gyroscope's position
+    // enters no measurement, so ctcal has no t_B_S parameter for it; a file that gives one (as a
+    // SPEC-literal writer may) is read, checked and ignored (docs/conventions.md, "SPEC read
+    // twice").
+    const bool gyro_translation =
+        s.type == SensorType::kGyro && s.name != rig.base_imu && node.IsMap() && node["t_B_S"];
+    if (gyro_translation) {
+      allowed.insert("t_B_S");
+      ReadSigmaValues(node["t_B_S"], where + ".t_B_S", 3, false, block);
+      if (block == "prior_sigma")
+        Warn(where + ".t_B_S: ignored (a gyroscope's position enters no measurement)");
+    }
     in_.CheckKeys(node, where, allowed, block + " of this sensor");
     for (const ParameterKey& k : keys) {
       if (node[k.key]) {
@@ -606,10 +636,11 @@ class RigReader {
           p.sensor = in_.String(m["sensor"], where + ".sensor");
         if (m["axis"])
           p.axis = in_.Vector3(m["axis"], where + ".axis");
+        // SPEC section 2: timestamps in files are integer nanoseconds (here on the base clock).
         if (m["t0"])
-          p.t0 = in_.FiniteDouble(m["t0"], where + ".t0");
+          p.t0 = SecondsFromNs(in_.Int64(m["t0"], where + ".t0 (integer nanoseconds)"));
         if (m["t1"])
-          p.t1 = in_.FiniteDouble(m["t1"], where + ".t1");
+          p.t1 = SecondsFromNs(in_.Int64(m["t1"], where + ".t1 (integer nanoseconds)"));
         o.motion.push_back(p);
       }
     }
@@ -769,8 +800,8 @@ void EmitObservability(YAML::Emitter& out, const Observability& o) {
         << YAML::Key << "sensor" << YAML::Value << YAML::DoubleQuoted << m.sensor << YAML::Key
         << "axis" << YAML::Value;
     EmitVector3(out, m.axis);
-    out << YAML::Key << "t0" << YAML::Value << FormatDouble(m.t0) << YAML::Key << "t1"
-        << YAML::Value << FormatDouble(m.t1) << YAML::EndMap;
+    out << YAML::Key << "t0" << YAML::Value << NsFromSeconds(m.t0) << YAML::Key << "t1"
+        << YAML::Value << NsFromSeconds(m.t1) << YAML::EndMap;
   }
   out << YAML::EndSeq;
   list("predicted_unobservable", o.predicted_unobservable);

@@ -147,27 +147,35 @@ Eigen::MatrixXd YamlIn::Matrix(const YAML::Node& node, const std::string& where,
   return m;
 }
 
-Eigen::Matrix3d YamlIn::Rotation(const YAML::Node& node, const std::string& where) const {
-  const Eigen::Matrix3d R = Matrix(node, where, 3, 3);
-  // 1e-6 accepts matrices printed with ~8 digits (Kalibr's files) and rejects real mistakes.
+Eigen::Matrix3d YamlIn::CheckedRotation(const Eigen::Matrix3d& R, const YAML::Node& node,
+                                        const std::string& where, const std::string& what) const {
   const double orth = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
-  if (orth > 1e-6 || R.determinant() < 0.0) {
+  if (orth > 1e-3 || R.determinant() < 0.0) {
     Fail(node, where,
-         "not a rotation matrix (|R^T R - I| = " + FormatDouble(orth) +
+         what + " (|R^T R - I| = " + FormatDouble(orth) +
              ", det = " + FormatDouble(R.determinant()) + ")");
   }
-  return R;
+  if (orth <= 1e-6)
+    return R;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d nearest = svd.matrixU() * svd.matrixV().transpose();
+  if (warn_) {
+    const int line = node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
+    warn_(file_ + ":" + std::to_string(line) + ": warning: " + where +
+          ": rotation not orthonormal within 1e-6 (|R^T R - I| = " + FormatDouble(orth) +
+          "), taken as the nearest rotation");
+  }
+  return nearest;
+}
+
+Eigen::Matrix3d YamlIn::Rotation(const YAML::Node& node, const std::string& where) const {
+  return CheckedRotation(Matrix(node, where, 3, 3), node, where, "not a rotation matrix");
 }
 
 Eigen::Matrix4d YamlIn::Rigid(const YAML::Node& node, const std::string& where) const {
-  const Eigen::Matrix4d T = Matrix(node, where, 4, 4);
-  const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
-  const double orth = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
-  if (orth > 1e-6 || R.determinant() < 0.0) {
-    Fail(node, where,
-         "not a rigid transform: rotation block has |R^T R - I| = " + FormatDouble(orth) +
-             ", det = " + FormatDouble(R.determinant()));
-  }
+  Eigen::Matrix4d T = Matrix(node, where, 4, 4);
+  T.topLeftCorner<3, 3>() = CheckedRotation(T.topLeftCorner<3, 3>(), node, where,
+                                            "not a rigid transform: rotation block");
   if (T(3, 0) != 0.0 || T(3, 1) != 0.0 || T(3, 2) != 0.0 || T(3, 3) != 1.0)
     Fail(node, where, "not a rigid transform: last row must be [0, 0, 0, 1]");
   return T;

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -15,6 +16,9 @@ class YamlIn {
  public:
   explicit YamlIn(std::string file) : file_(std::move(file)) {}
   const std::string& file() const { return file_; }
+  // Receives the notes of values taken with a correction (a rotation re-orthonormalised); without
+  // one they are dropped.
+  void SetWarn(std::function<void(const std::string&)> warn) { warn_ = std::move(warn); }
 
   // Loads a file; a missing file or malformed YAML throws naming the file (and line).
   static YAML::Node LoadFile(const std::string& path);
@@ -42,13 +46,20 @@ class YamlIn {
   // A row-major list of `rows` lists of `cols` finite numbers.
   Eigen::MatrixXd Matrix(const YAML::Node& node, const std::string& where, int rows,
                          int cols) const;
-  // A rotation matrix: orthonormal within 1e-6 and det +1.
+  // A rotation matrix with det +1: kept as written when orthonormal within 1e-6 (8 digits,
+  // Kalibr's files; exact round trips), replaced by the nearest rotation with a note when within
+  // 1e-3 (a drawing's rotation rounded to 4-6 decimals), an error beyond.
   Eigen::Matrix3d Rotation(const YAML::Node& node, const std::string& where) const;
   // A rigid transform: rotation block as above, last row [0 0 0 1].
   Eigen::Matrix4d Rigid(const YAML::Node& node, const std::string& where) const;
 
  private:
+  // R checked as above; `what` starts the error message.
+  Eigen::Matrix3d CheckedRotation(const Eigen::Matrix3d& R, const YAML::Node& node,
+                                  const std::string& where, const std::string& what) const;
+
   std::string file_;
+  std::function<void(const std::string&)> warn_;
 };
 
 }  // namespace ctcal::internal

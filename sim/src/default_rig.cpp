@@ -21,16 +21,6 @@ Eigen::Matrix4d Pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   return T;
 }
 
-InertialNoise Table4Noise(double rate_hz) {
-  InertialNoise n;
-  n.gyroscope_noise_density = 1.6968e-04;
-  n.gyroscope_random_walk = 1.9393e-05;
-  n.accelerometer_noise_density = 2.0e-3;
-  n.accelerometer_random_walk = 3.0e-3;
-  n.update_rate = rate_hz;
-  return n;
-}
-
 // Looking down along -z_B with image x along x_B: R_B_C = Rx(pi).
 const Eigen::Matrix3d kLookingDown = Exp(M_PI, 0.0, 0.0);
 
@@ -59,7 +49,7 @@ RigConfig DefaultRig() {
   imu0.D_a = {0.989, -0.0012, 1.011, 0.0009, 0.0007, 0.994};
   imu0.T_g = {0.0011, -0.0006, 0.0009, 0.0004, -0.0012, 0.0007, -0.0008, 0.0005, 0.0010};
   imu0.R_I_a = Exp(0.005, -0.004, 0.006);
-  imu0.noise = Table4Noise(250.0);
+  imu0.noise = EurocAdis16448Noise(250.0);
   imu0.estimate = {EstimateItem::kIntrinsics};
   rig.sensors.push_back(imu0);
 
@@ -75,7 +65,7 @@ RigConfig DefaultRig() {
   imu1.D_a = {1.008, 0.0008, 0.992, -0.0011, 0.0012, 1.006};
   imu1.T_g = {-0.0009, 0.0007, 0.0004, -0.0010, 0.0008, -0.0005, 0.0006, -0.0011, 0.0009};
   imu1.R_I_a = Exp(-0.006, 0.004, 0.005);
-  imu1.noise = Table4Noise(300.0);
+  imu1.noise = EurocAdis16448Noise(300.0);
   imu1.T_B_S = Pose(Exp(0.02, -0.03, M_PI / 2), Eigen::Vector3d(0.06, -0.04, 0.02));
   imu1.time_offset = 0.004;
   imu1.estimate = aux_estimate;
@@ -86,7 +76,7 @@ RigConfig DefaultRig() {
   gyro0.type = SensorType::kGyro;
   gyro0.gyro_model = GyroModel::kUpper;
   gyro0.D_w = {1.011, 0.0012, 0.988, 0.0009, -0.0013, 1.004};
-  gyro0.noise = Table4Noise(200.0);
+  gyro0.noise = EurocAdis16448Noise(200.0);
   gyro0.noise.accelerometer_noise_density = 0.0;
   gyro0.noise.accelerometer_random_walk = 0.0;
   gyro0.T_B_S = Pose(Exp(M_PI / 2, 0.02, -0.01), Eigen::Vector3d(-0.05, 0.03, 0.01));

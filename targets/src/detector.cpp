@@ -136,21 +136,16 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
           std::exp(-(dx * dx + dy * dy) / (2.0 * weight_sigma * weight_sigma));
     }
   }
-  const Eigen::Vector2d start = *uv;
-  Eigen::Vector2d q = start;
   cv::Mat patch;
-  Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
-  Eigen::Matrix2d G_inv = Eigen::Matrix2d::Zero();
-  bool converged = false;
-  for (int iteration = 0; iteration < 30; ++iteration) {
-    if (q.x() < h + 2 || q.y() < h + 2 || q.x() > gray.cols - h - 3 || q.y() > gray.rows - h - 3)
-      return false;
-    // getRectSubPix samples the patch centred on q (pixel centres at integer coordinates).
+  // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates).
+  const auto sample_patch = [&](const Eigen::Vector2d& at) {
     cv::getRectSubPix(gray, cv::Size(n, n),
-                      cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())), patch,
+                      cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
                       CV_32F);
-    G.setZero();
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  };
+  // f(d, w, g) for every pixel of the window: its offset d from the centre, its weight w and the
+  // central-difference gradient g of the patch there.
+  const auto for_each_gradient = [&](const auto& f) {
     for (int dy = -h; dy <= h; ++dy) {
       const float* row = patch.ptr<float>(dy + h + 1);
       const float* up = patch.ptr<float>(dy + h);
@@ -158,12 +153,27 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       for (int dx = -h; dx <= h; ++dx) {
         const int c = dx + h + 1;
         const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
-        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
-        const Eigen::Matrix2d wgg = w * g * g.transpose();
-        G += wgg;
-        b += wgg * Eigen::Vector2d(dx, dy);  // p_i - q_current
+        f(Eigen::Vector2d(dx, dy), weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)],
+          g);
       }
     }
+  };
+  const Eigen::Vector2d start = *uv;
+  Eigen::Vector2d q = start;
+  Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
+  Eigen::Matrix2d G_inv = Eigen::Matrix2d::Zero();
+  bool converged = false;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    if (q.x() < h + 2 || q.y() < h + 2 || q.x() > gray.cols - h - 3 || q.y() > gray.rows - h - 3)
+      return false;
+    sample_patch(q);
+    G.setZero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
+      const Eigen::Matrix2d wgg = w * g * g.transpose();
+      G += wgg;
+      b += wgg * d;  // p_i - q_current
+    });
     const double det = G.determinant();
     if (!(det > 1e-9 * G.trace() * G.trace()) || G.trace() <= 0.0)
       return false;
@@ -181,21 +191,11 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
   if (!converged)
     return false;
   if (sigma_px != nullptr) {
-    cv::getRectSubPix(gray, cv::Size(n, n),
-                      cv::Point2f(static_cast<float>(q.x()), static_cast<float>(q.y())), patch,
-                      CV_32F);
+    sample_patch(q);
     Eigen::Matrix2d meat = Eigen::Matrix2d::Zero();
-    for (int dy = -h; dy <= h; ++dy) {
-      const float* row = patch.ptr<float>(dy + h + 1);
-      const float* up = patch.ptr<float>(dy + h);
-      const float* down = patch.ptr<float>(dy + h + 2);
-      for (int dx = -h; dx <= h; ++dx) {
-        const int c = dx + h + 1;
-        const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
-        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
-        meat += (w * w * (dx * dx + dy * dy)) * g * g.transpose();
-      }
-    }
+    for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
+      meat += (w * w * d.squaredNorm()) * g * g.transpose();
+    });
     const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
     *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
   }

@@ -12,6 +12,7 @@
 #include <iterator>
 #include <string>
 
+#include "../calibrator/simulated_recording.h"
 #include "ctcal/sensors/compare.h"
 #include "ctcal/sensors/rig_yaml.h"
 
@@ -19,14 +20,8 @@ namespace ctcal {
 namespace {
 
 std::string Simulated(int seed, double duration) {
-  const std::string dir = ::testing::TempDir() + "/ctcal_methods_" + std::to_string(seed);
-  if (!std::filesystem::exists(dir + "/truth.yaml")) {
-    const std::string cmd = std::string(CTCAL_BINARY) + " simulate --scenario full --seed " +
-                            std::to_string(seed) + " --duration " + std::to_string(duration) +
-                            " --perturb table4 --out " + dir + " > /dev/null";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  }
-  return dir;
+  return test::SimulateOnce("ctcal_methods_" + std::to_string(seed),
+                            test::FullTable4Args(seed, duration));
 }
 
 TEST(CalibrateMethods, BothWritesTwoHonestResultsAndTheCrossCheck) {

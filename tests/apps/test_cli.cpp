@@ -11,6 +11,7 @@
 #include <limits>
 #include <sstream>
 
+#include "cli_test_util.h"
 #include "ctcal/sensors/rig_yaml.h"
 
 namespace ctcal {
@@ -18,40 +19,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using test::Lines;
+using test::Slurp;
+using Result = test::CliRun;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// Runs `ctcal <args>` through the shell, capturing stdout and stderr.
+// Runs `ctcal <args>` with its output in a folder of its own test.
 Result RunCtcal(const std::string& args) {
-  // Unique per process and test: ctest runs tests in parallel.
-  const std::string dir = ::testing::TempDir() + "/ctcal_cli_" + std::to_string(getpid()) + "_" +
-                          ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  fs::create_directories(dir);
-  const std::string out = dir + "/out.txt", err = dir + "/err.txt";
-  const std::string cmd = std::string(CTCAL_BINARY) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(out);
-  r.err = Slurp(err);
-  return r;
-}
-
-int Lines(const std::string& s) {
-  int n = 0;
-  for (char c : s)
-    n += c == '\n';
-  return n;
+  return test::RunCtcal(args, ::testing::TempDir() + "/ctcal_cli_" + std::to_string(getpid()) +
+                                  "_" +
+                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
 }
 
 const char* const kCommands[] = {"simulate", "detect",     "calibrate", "compare",

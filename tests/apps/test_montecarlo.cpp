@@ -14,45 +14,20 @@
 #include <sstream>
 #include <string>
 
+#include "cli_test_util.h"
+
 namespace ctcal {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string Slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using test::Lines;
+using test::RunCtcal;
+using test::Slurp;
+using Result = test::CliRun;
 
 std::string TempDir(const std::string& what) {
   return ::testing::TempDir() + "/ctcal_montecarlo_" + std::to_string(getpid()) + "_" + what;
-}
-
-Result RunCtcal(const std::string& args, const std::string& dir) {
-  fs::create_directories(dir);
-  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
-  const std::string cmd = std::string(CTCAL_BINARY) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(out);
-  r.err = Slurp(err);
-  return r;
-}
-
-int Lines(const std::string& s) {
-  int n = 0;
-  for (char c : s)
-    n += c == '\n';
-  return n;
 }
 
 class MonteCarlo : public ::testing::Test {

@@ -17,6 +17,8 @@
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/gyro_intrinsics.h"
 #include "ctcal/sensors/imu_intrinsics.h"
+#include "ctcal/sensors/inertial_noise.h"
+#include "ctcal/sensors/model_names.h"
 #include "ctcal/spline/rd_spline.h"
 #include "ctcal/spline/se3_spline.h"
 #include "ctcal/spline/so3_manifold.h"
@@ -121,6 +123,44 @@ inline const ceres::Manifold* GravityManifold() {
   return &m;
 }
 
+// Orders 4-6 in both representations.
+using TrajectoryConfigs = ::testing::Types<
+    TrajectoryConfig<4, Se3Representation::kSplit>, TrajectoryConfig<5, Se3Representation::kSplit>,
+    TrajectoryConfig<6, Se3Representation::kSplit>, TrajectoryConfig<4, Se3Representation::kJoint>,
+    TrajectoryConfig<5, Se3Representation::kJoint>, TrajectoryConfig<6, Se3Representation::kJoint>>;
+
+// What the camera residuals read besides their corners: a trajectory with knots every 0.1 s and
+// one camera's extrinsics and clock (time offset, line delay).
+inline constexpr std::int64_t kCameraKnotDtNs = 100'000'000;
+template <int N, Se3Representation Rep>
+struct CameraState {
+  CameraState(double offset, double line_delay)
+      : spline_(MakeTrajectory<N, Rep>(12, kCameraKnotDtNs, 7)),
+        offset_(offset),
+        line_delay_(line_delay) {
+    std::mt19937 rng(11);
+    q_B_C_ = RandomRotation(&rng, 0.5);
+    t_B_C_ = Eigen::Vector3d(0.05, -0.02, 0.01);
+  }
+
+  // Points the blocks every camera residual has (trajectory segment, extrinsics, time offset,
+  // intrinsics) of its Parameters p at this state.
+  template <class Parameters>
+  void SetCameraBlocks(int first, double* params, Parameters* p) {
+    p->traj = SegmentBlocks(&spline_, first);
+    p->q_B_C = q_B_C_.coeffs().data();
+    p->t_B_C = t_B_C_.data();
+    p->time_offset = &offset_;
+    p->params = params;
+  }
+
+  Se3Spline<N, Rep> spline_;
+  Eigen::Quaterniond q_B_C_;
+  Eigen::Vector3d t_B_C_;
+  double offset_;
+  double line_delay_;
+};
+
 // Plausible parameters of every model, with noticeable distortion.
 inline Eigen::VectorXd CameraParams(CameraModelType type) {
   Eigen::VectorXd p;
@@ -206,6 +246,51 @@ inline void AppendImuIntrinsicManifolds(const ImuModelLayout& L,
     m->push_back(LeftRotationManifold());
 }
 
+// Calls check(name, &intrinsics) for every IMU model x g_sensitivity, with intrinsics drawn from
+// `seed` (RandomImuIntrinsics) and the pair's name traced.
+template <class Check>
+void ForEveryImuModel(unsigned seed, const Check& check) {
+  for (const ImuModel model : kAllImuModels) {
+    for (const GSensitivity gs : kAllGSensitivities) {
+      const std::string name = ToString(model) + " g_sensitivity " + ToString(gs);
+      SCOPED_TRACE(name);
+      ImuIntrinsics intrinsics = RandomImuIntrinsics(model, gs, seed);
+      check(name, &intrinsics);
+    }
+  }
+}
+
+// What the base and auxiliary IMU residuals read besides their own sensor: a trajectory with
+// knots every 50 ms, gravity, and gyroscope and accelerometer bias splines with knots every 0.4 s,
+// drawn from seed, seed + 1 and seed + 2.
+inline constexpr std::int64_t kInertialKnotDtNs = 50'000'000;
+template <int N, Se3Representation Rep, int Nb>
+struct InertialState {
+  static constexpr std::int64_t kBiasDtNs = 400'000'000;
+
+  InertialState(unsigned seed, const Eigen::Vector3d& g_direction)
+      : spline_(MakeTrajectory<N, Rep>(16, kInertialKnotDtNs, seed)),
+        bg_(MakeBias<Nb>(6, kBiasDtNs, 0.01, seed + 1)),
+        ba_(MakeBias<Nb>(6, kBiasDtNs, 0.1, seed + 2)),
+        g_W_(g_direction.normalized() * 9.81) {}
+
+  // Points the blocks every IMU residual has (trajectory and bias segments, gravity, intrinsics)
+  // of its Parameters p at this state.
+  template <class Parameters>
+  void SetSharedBlocks(int first, int bias_first, ImuIntrinsics* intrinsics, Parameters* p) {
+    p->traj = SegmentBlocks(&spline_, first);
+    p->g_W = g_W_.data();
+    p->bg = BiasBlocks(&bg_, bias_first);
+    p->ba = BiasBlocks(&ba_, bias_first);
+    p->intrinsics = intrinsics;
+  }
+
+  Se3Spline<N, Rep> spline_;
+  RdSpline<3, Nb> bg_;
+  RdSpline<3, Nb> ba_;
+  Eigen::Vector3d g_W_;
+};
+
 // A cost function evaluated at the current parameter values: residual and ambient Jacobians.
 struct Evaluation {
   bool ok = false;
@@ -233,6 +318,31 @@ inline Evaluation EvaluateCost(const ceres::CostFunction& cost, const std::vecto
       e.J.push_back(j);
   }
   return e;
+}
+
+// Both paths of a residual, make(analytic) for analytic and Jet autodiff, are zero at `blocks`
+// to within tol: the check of a noise-free truth.
+template <class Make>
+void ExpectZeroOnBothPaths(const Make& make, const std::vector<double*>& blocks, double tol) {
+  for (const bool analytic : {true, false}) {
+    const std::unique_ptr<ceres::CostFunction> cost(make(analytic));
+    const Evaluation e = EvaluateCost(*cost, blocks, false);
+    ASSERT_TRUE(e.ok);
+    EXPECT_LT(e.r.norm(), tol) << (analytic ? "analytic " : "autodiff ") << e.r.transpose();
+  }
+}
+
+// The zero-at-truth check of an IMU residual over every IMU model x g_sensitivity at one stamp,
+// for a fixture with Truth(intrinsics, stamp, &first, &bias_first), Blocks(first, bias_first,
+// &intrinsics) and a static MakeResidual(analytic, setup).
+template <class Fixture>
+void ExpectZeroAtTruthForEveryImuModel(Fixture* fixture, std::int64_t stamp_ns, unsigned seed) {
+  ForEveryImuModel(seed, [&](const std::string&, ImuIntrinsics* intrinsics) {
+    int first = 0, bias_first = 0;
+    const auto setup = fixture->Truth(*intrinsics, stamp_ns, &first, &bias_first);
+    ExpectZeroOnBothPaths([&](bool analytic) { return Fixture::MakeResidual(analytic, setup); },
+                          fixture->Blocks(first, bias_first, intrinsics), 1e-7);
+  });
 }
 
 // J_ambient * PlusJacobian: the Jacobian with respect to the block's tangent (what Ceres uses).

@@ -23,41 +23,19 @@
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "issue7_tolerances.h"
+#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Simulates DATA once per process with the CLI (`ctcal simulate`, the path users take).
+using test::Quiet;
+
+// Simulates DATA from the coarse guess once per process.
 std::string Simulate(const std::string& tag, const std::string& args) {
-  const fs::path dir =
-      fs::path(::testing::TempDir()) / ("ctcal_coarse_" + tag + "_" + std::to_string(::getpid()));
-  if (!fs::exists(dir / "truth.yaml")) {
-    const std::string cmd = std::string(CTCAL_BINARY) + " simulate " + args +
-                            " --perturb coarse --out " + dir.string() + " > /dev/null";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  }
-  return dir.string();
-}
-
-struct Loaded {
-  RigConfig rig;
-  RigConfig truth;
-  std::map<std::string, SensorData> data;
-};
-
-Loaded Load(const std::string& dir) {
-  Loaded l;
-  std::vector<std::string> warnings;
-  l.rig = LoadRig(dir + "/rig.yaml", &warnings);
-  l.truth = LoadRig(dir + "/truth.yaml", &warnings);
-  l.data = LoadDataset(dir, l.rig, &warnings);
-  return l;
-}
-
-CalibrationLog Quiet() {
-  return [](const std::string&) {};
+  return test::SimulateOnce("ctcal_coarse_" + tag + "_" + std::to_string(::getpid()),
+                            args + " --perturb coarse");
 }
 
 // Prints the stage findings and solver progress only when CTCAL_VERBOSE is set.
@@ -79,7 +57,8 @@ using issue7::ExpectWithinTolerances;
 // The default rig (base IMU, auxiliary IMU, gyro, a pinhole-radtan and a pinhole-equidistant
 // camera, offsets +4, -3, +6, -5 ms) over 12 s of the full scenario, from the coarse guess.
 TEST(CoarseCalibration, DefaultRigFromCoarseGuess) {
-  const Loaded l = Load(Simulate("default", "--scenario full --seed 21 --duration 12"));
+  const test::Recording l =
+      test::LoadRecording(Simulate("default", "--scenario full --seed 21 --duration 12"));
   const SplineCalibrationResult r = CalibrateSpline(l.rig, l.data, TwoThreads(), TestLog());
   std::printf("default rig from the coarse guess: %d iterations, %.1f s total\n", r.iterations,
               r.total_seconds);
@@ -104,8 +83,8 @@ TEST(CoarseCalibration, EightyMillisecondOffsets) {
   const fs::path rig_path = fs::path(::testing::TempDir()) /
                             ("ctcal_coarse_80ms_" + std::to_string(::getpid()) + ".yaml");
   SaveRig(truth, rig_path.string());
-  const Loaded l =
-      Load(Simulate("80ms", "--scenario full --seed 22 --duration 10 --rig " + rig_path.string()));
+  const test::Recording l = test::LoadRecording(
+      Simulate("80ms", "--scenario full --seed 22 --duration 10 --rig " + rig_path.string()));
   std::vector<std::string> lines;
   const SplineCalibrationResult r = CalibrateSpline(
       l.rig, l.data, TwoThreads(), [&](const std::string& line) { lines.push_back(line); });
@@ -124,9 +103,9 @@ TEST(CoarseCalibration, EightyMillisecondOffsets) {
 // of degrees and offsets of +100, -85, -100, +60 ms, from a zero-offset coarse guess, 20 s (at
 // 12 s its cameras' rotations are near 0.05 deg at ~1 sigma: docs/initialisation.md, the sweep).
 TEST(CoarseCalibration, HandWrittenRigWithHundredMillisecondOffsets) {
-  const Loaded l =
-      Load(Simulate("hand", "--scenario full --seed 203 --duration 20 --rig " +
-                                std::string(CTCAL_SOURCE_DIR) + "/configs/init_sweep_rig.yaml"));
+  const test::Recording l = test::LoadRecording(
+      Simulate("hand", "--scenario full --seed 203 --duration 20 --rig " +
+                           std::string(CTCAL_SOURCE_DIR) + "/configs/init_sweep_rig.yaml"));
   const SplineCalibrationResult r = CalibrateSpline(l.rig, l.data, TwoThreads(), TestLog());
   std::printf("hand-written rig from the coarse guess: %d iterations, %.1f s total\n", r.iterations,
               r.total_seconds);
@@ -135,18 +114,16 @@ TEST(CoarseCalibration, HandWrittenRigWithHundredMillisecondOffsets) {
 }
 
 std::string InputErrorOf(const RigConfig& rig, const std::map<std::string, SensorData>& data) {
-  try {
-    CalibrateSpline(rig, data, TwoThreads(), Quiet());
-  } catch (const CalibrationInputError& e) {
-    std::printf("  %s\n", e.what());
-    return e.what();
-  }
-  return "";
+  const std::string what =
+      test::InputErrorOf([&] { CalibrateSpline(rig, data, TwoThreads(), Quiet()); });
+  std::printf("  %s\n", what.c_str());
+  return what;
 }
 
 // A camera that never sees the board: the board-poses stage names itself and the camera.
 TEST(CoarseCalibration, CameraWithoutViewsNamesStageAndSensor) {
-  Loaded l = Load(Simulate("short", "--scenario full --seed 23 --duration 4"));
+  test::Recording l =
+      test::LoadRecording(Simulate("short", "--scenario full --seed 23 --duration 4"));
   l.data["cam0"].corners.clear();
   EXPECT_THAT(InputErrorOf(l.rig, l.data),
               ::testing::AllOf(::testing::HasSubstr("stage 'board poses'"),
@@ -163,7 +140,7 @@ std::string YawData() {
 // Every view is nearly fronto-parallel, so focal length and board depth trade freely: the
 // intrinsics stage names itself and the camera instead of handing on a degenerate model.
 TEST(CoarseCalibration, FrontoParallelViewsFailIntrinsics) {
-  const Loaded l = Load(YawData());
+  const test::Recording l = test::LoadRecording(YawData());
   EXPECT_THAT(InputErrorOf(l.rig, l.data),
               ::testing::AllOf(::testing::HasSubstr("stage 'camera intrinsics'"),
                                ::testing::HasSubstr("sensor 'cam0'"),
@@ -174,7 +151,7 @@ TEST(CoarseCalibration, FrontoParallelViewsFailIntrinsics) {
 // initialisation needs is the auxiliary IMU's, and its rotation about the only excited axis is
 // free: the hand-eye stage says so for imu1.
 TEST(CoarseCalibration, YawOnlyMotionFailsHandEyeForTheImu) {
-  Loaded l = Load(YawData());
+  test::Recording l = test::LoadRecording(YawData());
   for (SensorConfig& s : l.rig.sensors) {
     if (s.type != SensorType::kCamera)
       continue;
@@ -190,7 +167,8 @@ TEST(CoarseCalibration, YawOnlyMotionFailsHandEyeForTheImu) {
 
 // Time ranges that cannot overlap at any offset in the search: the time-offset stage names it.
 TEST(CoarseCalibration, NonOverlappingSensorNamesStage) {
-  Loaded l = Load(Simulate("short", "--scenario full --seed 23 --duration 4"));
+  test::Recording l =
+      test::LoadRecording(Simulate("short", "--scenario full --seed 23 --duration 4"));
   for (GyroSample& z : l.data["gyro0"].gyro)
     z.t_ns += 1000000000000LL;  // 1000 s later
   EXPECT_THAT(InputErrorOf(l.rig, l.data),
@@ -257,7 +235,7 @@ std::string List(const std::vector<double>& v) {
 // guess gives the same estimates as from our own files, to a small fraction of their sigma.
 TEST(CoarseCalibration, ForeignDatasetCalibratesTheSame) {
   const std::string dir = Simulate("short", "--scenario full --seed 23 --duration 4");
-  const Loaded ours = Load(dir);
+  const test::Recording ours = test::LoadRecording(dir);
   const std::map<std::string, std::string> rename = {{"imu0", "body_imu"},
                                                      {"imu1", "aux_imu"},
                                                      {"gyro0", "fog"},

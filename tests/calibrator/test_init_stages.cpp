@@ -85,6 +85,17 @@ class InitStages : public ::testing::Test {
         .views;
   }
   std::vector<RateSample> BaseRates() const { return RatesFromImu(data_->data.at("imu0").imu); }
+  // A sensor's angular rates: an IMU's or gyroscope's samples, a camera's true board views.
+  std::vector<RateSample> Rates(const std::string& name) const {
+    switch (data_->truth.Find(name)->type) {
+      case SensorType::kImu:
+        return RatesFromImu(data_->data.at(name).imu);
+      case SensorType::kGyro:
+        return RatesFromGyro(data_->data.at(name).gyro);
+      default:
+        return RatesFromBoardViews(TrueViews(name));
+    }
+  }
   const SimData* data_ = nullptr;
 };
 
@@ -174,13 +185,7 @@ TEST_F(InitStages, TimeOffsets) {
   const std::vector<RateSample> base = BaseRates();
   for (const std::string name : {"imu1", "gyro0", "cam0", "cam1"}) {
     const SensorConfig& truth = *data_->truth.Find(name);
-    std::vector<RateSample> rates;
-    if (truth.type == SensorType::kImu)
-      rates = RatesFromImu(data_->data.at(name).imu);
-    else if (truth.type == SensorType::kGyro)
-      rates = RatesFromGyro(data_->data.at(name).gyro);
-    else
-      rates = RatesFromBoardViews(TrueViews(name));
+    const std::vector<RateSample> rates = Rates(name);
     const TimeOffsetResult r = InitTimeOffset(name, base, rates, {}, {});
     std::printf("%s: time offset %+.4f ms (truth %+.4f ms), peak %.4f, next %.3f\n", name.c_str(),
                 r.time_offset * 1e3, truth.time_offset * 1e3, r.peak_correlation,
@@ -195,13 +200,7 @@ TEST_F(InitStages, HandEyeRotations) {
   const std::vector<RateSample> base = BaseRates();
   for (const std::string name : {"imu1", "gyro0", "cam0", "cam1"}) {
     const SensorConfig& truth = *data_->truth.Find(name);
-    std::vector<RateSample> rates;
-    if (truth.type == SensorType::kImu)
-      rates = RatesFromImu(data_->data.at(name).imu);
-    else if (truth.type == SensorType::kGyro)
-      rates = RatesFromGyro(data_->data.at(name).gyro);
-    else
-      rates = RatesFromBoardViews(TrueViews(name));
+    const std::vector<RateSample> rates = Rates(name);
     const HandEyeResult r = InitRotationHandEye(name, base, rates, truth.time_offset, {}, {});
     const double err = AngleBetween(r.R_B_S, truth.T_B_S.topLeftCorner<3, 3>());
     const double guess_err = AngleBetween(data_->guess.Find(name)->T_B_S.topLeftCorner<3, 3>(),

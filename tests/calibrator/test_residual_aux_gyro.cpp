@@ -92,13 +92,9 @@ TYPED_TEST(AuxGyroResidualTest, ZeroAtNoiseFreeTruthForEveryModel) {
     GyroIntrinsics gyro = RandomGyro(model, 3);
     int first = 0, bias_first = 0;
     const GyroSampleSetup setup = this->Truth(gyro, stamp_ns, &first, &bias_first);
-    for (const bool analytic : {true, false}) {
-      std::unique_ptr<ceres::CostFunction> cost(MakeAuxGyroResidual<N, Rep, Nb>(analytic, setup));
-      const testing::Evaluation e =
-          testing::EvaluateCost(*cost, this->Blocks(first, bias_first, &gyro), false);
-      ASSERT_TRUE(e.ok);
-      EXPECT_LT(e.r.norm(), 1e-8) << e.r.transpose();
-    }
+    testing::ExpectZeroOnBothPaths(
+        [&](bool analytic) { return MakeAuxGyroResidual<N, Rep, Nb>(analytic, setup); },
+        this->Blocks(first, bias_first, &gyro), 1e-8);
   }
 }
 

@@ -15,62 +15,52 @@
 namespace ctcal {
 namespace {
 
-constexpr std::int64_t kDtNs = 50'000'000;
-constexpr std::int64_t kBiasDtNs = 400'000'000;
-constexpr int kNumKnots = 16;
+constexpr std::int64_t kDtNs = testing::kInertialKnotDtNs;
 
 template <typename C>
-class AuxImuResidualTest : public ::testing::Test {
- protected:
+class AuxImuResidualTest : public ::testing::Test,
+                           protected testing::InertialState<C::N, C::Rep, C::Nb> {
+ public:
   static constexpr int N = C::N;
   static constexpr Se3Representation Rep = C::Rep;
   static constexpr int Nb = C::Nb;
   using Residual = AuxImuResidual<N, Rep, Nb>;
 
-  AuxImuResidualTest()
-      : spline_(testing::MakeTrajectory<N, Rep>(kNumKnots, kDtNs, 13)),
-        bg_(testing::MakeBias<Nb>(6, kBiasDtNs, 0.01, 14)),
-        ba_(testing::MakeBias<Nb>(6, kBiasDtNs, 0.1, 15)),
-        g_W_(Eigen::Vector3d(-0.2, 0.1, -9.7).normalized() * 9.81) {
+  static ceres::CostFunction* MakeResidual(bool analytic, const ImuSampleSetup& setup) {
+    return MakeAuxImuResidual<N, Rep, Nb>(analytic, setup);
+  }
+
+  AuxImuResidualTest() : testing::InertialState<N, Rep, Nb>(13, Eigen::Vector3d(-0.2, 0.1, -9.7)) {
     std::mt19937 rng(16);
     q_B_S_ = testing::RandomRotation(&rng, 2.0);
     t_B_S_ = Eigen::Vector3d(0.12, -0.07, 0.05);
-    noise_.gyroscope_noise_density = 1.7e-4;
-    noise_.gyroscope_random_walk = 2e-5;
-    noise_.accelerometer_noise_density = 2e-3;
-    noise_.accelerometer_random_walk = 3e-3;
-    noise_.update_rate = 400.0;
   }
 
   ImuSampleSetup Truth(const ImuIntrinsics& intrinsics, std::int64_t stamp_ns, int* first,
                        int* bias_first) const {
     Se3Kinematics<double> k;
-    spline_.Evaluate(stamp_ns, offset_, 2, &g_W_, &k, nullptr, first);
+    this->spline_.Evaluate(stamp_ns, offset_, 2, &this->g_W_, &k, nullptr, first);
     const Eigen::Matrix3d R_S_B = q_B_S_.toRotationMatrix().transpose();
     const Eigen::Vector3d& r = t_B_S_;
     const Eigen::Vector3d w_S = R_S_B * k.w_B;
     const Eigen::Vector3d a_S =
-        R_S_B * (k.SpecificForce(g_W_) + k.alpha_B.cross(r) + k.w_B.cross(k.w_B.cross(r)));
+        R_S_B * (k.SpecificForce(this->g_W_) + k.alpha_B.cross(r) + k.w_B.cross(k.w_B.cross(r)));
     ImuSampleSetup s;
     s.layout = intrinsics.layout();
-    intrinsics.RawFromTrue(w_S, a_S, bg_.Evaluate(stamp_ns, 0, 0.0, bias_first),
-                           ba_.Evaluate(stamp_ns), &s.z.w_m, &s.z.a_m);
-    s.W = ImuWhitening::Of(noise_);
-    s.clock = SegmentClock::At(stamp_ns, spline_.timing(), *first);
-    s.bias_clock = SegmentClock::At(stamp_ns, bg_.timing(), *bias_first);
+    intrinsics.RawFromTrue(w_S, a_S, this->bg_.Evaluate(stamp_ns, 0, 0.0, bias_first),
+                           this->ba_.Evaluate(stamp_ns), &s.z.w_m, &s.z.a_m);
+    s.W = ImuWhitening::Of(EurocAdis16448Noise(400.0));
+    s.clock = SegmentClock::At(stamp_ns, this->spline_.timing(), *first);
+    s.bias_clock = SegmentClock::At(stamp_ns, this->bg_.timing(), *bias_first);
     return s;
   }
 
   std::vector<double*> Blocks(int first, int bias_first, ImuIntrinsics* intrinsics) {
     typename Residual::Parameters p;
-    p.traj = testing::SegmentBlocks(&spline_, first);
-    p.g_W = g_W_.data();
+    this->SetSharedBlocks(first, bias_first, intrinsics, &p);
     p.q_B_S = q_B_S_.coeffs().data();
     p.t_B_S = t_B_S_.data();
     p.time_offset = &offset_;
-    p.bg = testing::BiasBlocks(&bg_, bias_first);
-    p.ba = testing::BiasBlocks(&ba_, bias_first);
-    p.intrinsics = intrinsics;
     return Residual::Blocks(p);
   }
 
@@ -83,65 +73,38 @@ class AuxImuResidualTest : public ::testing::Test {
     return m;
   }
 
-  Se3Spline<N, Rep> spline_;
-  RdSpline<3, Nb> bg_;
-  RdSpline<3, Nb> ba_;
-  Eigen::Vector3d g_W_;
   Eigen::Quaterniond q_B_S_;
   Eigen::Vector3d t_B_S_;
   double offset_ = -0.0071;
-  InertialNoise noise_;
 };
 
 TYPED_TEST_SUITE(AuxImuResidualTest, testing::InertialConfigs);
 
 TYPED_TEST(AuxImuResidualTest, ZeroAtNoiseFreeTruthForEveryModel) {
-  constexpr int N = TestFixture::N;
-  constexpr Se3Representation Rep = TestFixture::Rep;
-  constexpr int Nb = TestFixture::Nb;
-  const std::int64_t stamp_ns = testing::kT0Ns + 5 * kDtNs + 2'345'671;
-  for (const ImuModel model : testing::kAllImuModels) {
-    for (const GSensitivity gs : testing::kAllGSensitivities) {
-      SCOPED_TRACE(ToString(model) + " g_sensitivity " + ToString(gs));
-      ImuIntrinsics intrinsics = testing::RandomImuIntrinsics(model, gs, 19);
-      int first = 0, bias_first = 0;
-      const ImuSampleSetup setup = this->Truth(intrinsics, stamp_ns, &first, &bias_first);
-      for (const bool analytic : {true, false}) {
-        std::unique_ptr<ceres::CostFunction> cost(MakeAuxImuResidual<N, Rep, Nb>(analytic, setup));
-        const testing::Evaluation e =
-            testing::EvaluateCost(*cost, this->Blocks(first, bias_first, &intrinsics), false);
-        ASSERT_TRUE(e.ok);
-        EXPECT_LT(e.r.norm(), 1e-7) << (analytic ? "analytic " : "autodiff ") << e.r.transpose();
-      }
-    }
-  }
+  testing::ExpectZeroAtTruthForEveryImuModel(this, testing::kT0Ns + 5 * kDtNs + 2'345'671, 19);
 }
 
 TYPED_TEST(AuxImuResidualTest, AnalyticMatchesAutoDiffAndCentralDifferences) {
   using Residual = typename TestFixture::Residual;
   const std::int64_t stamp_ns = testing::kT0Ns + 7 * kDtNs + 1'000'003;
-  for (const ImuModel model : testing::kAllImuModels) {
-    for (const GSensitivity gs : testing::kAllGSensitivities) {
-      const std::string name = ToString(model) + " g_sensitivity " + ToString(gs);
-      ImuIntrinsics intrinsics = testing::RandomImuIntrinsics(model, gs, 20);
-      int first = 0, bias_first = 0;
-      ImuSampleSetup setup = this->Truth(intrinsics, stamp_ns, &first, &bias_first);
-      setup.z.w_m += Eigen::Vector3d(0.01, -0.02, 0.005);
-      setup.z.a_m += Eigen::Vector3d(-0.1, 0.05, 0.2);
-      // The sample's own segment, and the next one, on which the shifted time has u < 0.
-      for (const int segment : {first, first + 1}) {
-        setup.clock = SegmentClock::At(stamp_ns, this->spline_.timing(), segment);
-        if (segment != first) {
-          EXPECT_LT(setup.clock.U(this->offset_), 0.0);
-        }
-        const typename Residual::Analytic analytic(setup);
-        std::unique_ptr<ceres::CostFunction> autodiff(Residual::MakeAutoDiff(setup));
-        testing::ExpectAnalyticMatchesAutoDiffAndNumeric(
-            analytic, *autodiff, this->Blocks(segment, bias_first, &intrinsics),
-            this->Manifolds(setup.layout), name + " segment " + std::to_string(segment));
+  testing::ForEveryImuModel(20, [&](const std::string& name, ImuIntrinsics* intrinsics) {
+    int first = 0, bias_first = 0;
+    ImuSampleSetup setup = this->Truth(*intrinsics, stamp_ns, &first, &bias_first);
+    setup.z.w_m += Eigen::Vector3d(0.01, -0.02, 0.005);
+    setup.z.a_m += Eigen::Vector3d(-0.1, 0.05, 0.2);
+    // The sample's own segment, and the next one, on which the shifted time has u < 0.
+    for (const int segment : {first, first + 1}) {
+      setup.clock = SegmentClock::At(stamp_ns, this->spline_.timing(), segment);
+      if (segment != first) {
+        EXPECT_LT(setup.clock.U(this->offset_), 0.0);
       }
+      const typename Residual::Analytic analytic(setup);
+      std::unique_ptr<ceres::CostFunction> autodiff(Residual::MakeAutoDiff(setup));
+      testing::ExpectAnalyticMatchesAutoDiffAndNumeric(
+          analytic, *autodiff, this->Blocks(segment, bias_first, intrinsics),
+          this->Manifolds(setup.layout), name + " segment " + std::to_string(segment));
     }
-  }
+  });
 }
 
 // The sign of the time offset: a sample of a sensor whose clock runs `offset` behind is explained

@@ -14,24 +14,17 @@
 namespace ctcal {
 namespace {
 
-using testing::TrajectoryConfig;
-
-constexpr std::int64_t kDtNs = 100'000'000;  // 0.1 s knots
-constexpr int kNumKnots = 12;
+constexpr std::int64_t kDtNs = testing::kCameraKnotDtNs;
 
 template <typename C>
-class CornerResidualTest : public ::testing::Test {
+class CornerResidualTest : public ::testing::Test, protected testing::CameraState<C::N, C::Rep> {
  protected:
   static constexpr int N = C::N;
   static constexpr Se3Representation Rep = C::Rep;
   using Spline = Se3Spline<N, Rep>;
   using Residual = CornerResidual<N, Rep>;
 
-  CornerResidualTest() : spline_(testing::MakeTrajectory<N, Rep>(kNumKnots, kDtNs, 7)) {
-    std::mt19937 rng(11);
-    q_B_C_ = testing::RandomRotation(&rng, 0.5);
-    t_B_C_ = Eigen::Vector3d(0.05, -0.02, 0.01);
-  }
+  CornerResidualTest() : testing::CameraState<N, Rep>(0.0123, 3.1e-5) {}
 
   // A corner seen at stamp_ns: its p_W is chosen in front of the camera at the nominal read-out
   // time; then uv is iterated to the fixed point uv = project(p_C(t_S + offset + v line_delay)).
@@ -40,19 +33,19 @@ class CornerResidualTest : public ::testing::Test {
     const CameraModel camera(type, params, Eigen::Vector2i(640, 480));
     const auto pose_at = [&](double v) {
       Se3Kinematics<double> k;
-      spline_.Evaluate(stamp_ns, offset_ + v * line_delay_, 0, nullptr, &k);
+      this->spline_.Evaluate(stamp_ns, this->offset_ + v * this->line_delay_, 0, nullptr, &k);
       return k;
     };
-    const Eigen::Matrix3d R_B_C = q_B_C_.toRotationMatrix();
+    const Eigen::Matrix3d R_B_C = this->q_B_C_.toRotationMatrix();
     Se3Kinematics<double> k = pose_at(240.0);
     CornerMeasurement m;
-    m.p_W = k.R_W_B * (R_B_C * p_C_nominal + t_B_C_) + k.p_W_B;
+    m.p_W = k.R_W_B * (R_B_C * p_C_nominal + this->t_B_C_) + k.p_W_B;
     m.sigma_px = 0.7;
     double v = 240.0;
     for (int it = 0; it < 50; ++it) {
       k = pose_at(v);
       const Eigen::Vector3d p_C =
-          R_B_C.transpose() * (k.R_W_B.transpose() * (m.p_W - k.p_W_B) - t_B_C_);
+          R_B_C.transpose() * (k.R_W_B.transpose() * (m.p_W - k.p_W_B) - this->t_B_C_);
       EXPECT_TRUE(camera.Project(p_C, &m.uv));
       v = m.uv.y();
     }
@@ -61,12 +54,8 @@ class CornerResidualTest : public ::testing::Test {
 
   std::vector<double*> Blocks(int first_index, double* params) {
     typename Residual::Parameters p;
-    p.traj = testing::SegmentBlocks(&spline_, first_index);
-    p.q_B_C = q_B_C_.coeffs().data();
-    p.t_B_C = t_B_C_.data();
-    p.time_offset = &offset_;
-    p.line_delay = &line_delay_;
-    p.params = params;
+    this->SetCameraBlocks(first_index, params, &p);
+    p.line_delay = &this->line_delay_;
     return Residual::Blocks(p);
   }
 
@@ -85,21 +74,11 @@ class CornerResidualTest : public ::testing::Test {
 
   // The segment containing t and the clock of a sample stamped stamp_ns in it.
   int SegmentOf(std::int64_t stamp_ns, double shift) const {
-    return spline_.ComputeIndexOrThrow(stamp_ns, shift).first_index;
+    return this->spline_.ComputeIndexOrThrow(stamp_ns, shift).first_index;
   }
-
-  Spline spline_;
-  Eigen::Quaterniond q_B_C_;
-  Eigen::Vector3d t_B_C_;
-  double offset_ = 0.0123;
-  double line_delay_ = 3.1e-5;
 };
 
-using Configs = ::testing::Types<
-    TrajectoryConfig<4, Se3Representation::kSplit>, TrajectoryConfig<5, Se3Representation::kSplit>,
-    TrajectoryConfig<6, Se3Representation::kSplit>, TrajectoryConfig<4, Se3Representation::kJoint>,
-    TrajectoryConfig<5, Se3Representation::kJoint>, TrajectoryConfig<6, Se3Representation::kJoint>>;
-TYPED_TEST_SUITE(CornerResidualTest, Configs);
+TYPED_TEST_SUITE(CornerResidualTest, testing::TrajectoryConfigs);
 
 TYPED_TEST(CornerResidualTest, ZeroAtNoiseFreeTruthForEveryCameraModel) {
   constexpr int N = TestFixture::N;

@@ -18,11 +18,10 @@ namespace {
 
 using testing::TrajectoryConfig;
 
-constexpr std::int64_t kDtNs = 100'000'000;  // 0.1 s knots
-constexpr int kNumKnots = 12;
+constexpr std::int64_t kDtNs = testing::kCameraKnotDtNs;
 
 template <typename C>
-class FrameCornersTest : public ::testing::Test {
+class FrameCornersTest : public ::testing::Test, protected testing::CameraState<C::N, C::Rep> {
  protected:
   static constexpr int N = C::N;
   static constexpr Se3Representation Rep = C::Rep;
@@ -30,15 +29,11 @@ class FrameCornersTest : public ::testing::Test {
   using Frame = FrameCornersResidual<N, Rep>;
   using Corner = CornerResidual<N, Rep>;
 
-  FrameCornersTest() : spline_(testing::MakeTrajectory<N, Rep>(kNumKnots, kDtNs, 7)) {
-    std::mt19937 rng(11);
-    q_B_C_ = testing::RandomRotation(&rng, 0.5);
-    t_B_C_ = Eigen::Vector3d(0.05, -0.02, 0.01);
-  }
+  FrameCornersTest() : testing::CameraState<N, Rep>(0.0031, 0.0) {}
 
   int SegmentAt(std::int64_t stamp_ns) const {
-    const double s = 1e-9 * static_cast<double>(stamp_ns - testing::kT0Ns) + offset_;
-    return std::min(static_cast<int>(s / (1e-9 * kDtNs)), spline_.NumSegments() - 1);
+    const double s = 1e-9 * static_cast<double>(stamp_ns - testing::kT0Ns) + this->offset_;
+    return std::min(static_cast<int>(s / (1e-9 * kDtNs)), this->spline_.NumSegments() - 1);
   }
 
   // The corners of a board seen at stamp_ns: a 6x5 grid ~1 m in front of the camera (tilted),
@@ -48,8 +43,8 @@ class FrameCornersTest : public ::testing::Test {
     std::mt19937 rng(seed);
     std::normal_distribution<double> gauss(0.0, 1.0);
     Se3Kinematics<double> k;
-    spline_.Evaluate(stamp_ns, offset_, 0, nullptr, &k);
-    const Eigen::Matrix3d R_B_C = q_B_C_.toRotationMatrix();
+    this->spline_.Evaluate(stamp_ns, this->offset_, 0, nullptr, &k);
+    const Eigen::Matrix3d R_B_C = this->q_B_C_.toRotationMatrix();
     const Eigen::Matrix3d tilt = ExpSO3<double>(Eigen::Vector3d(0.3, -0.2, 0.1)).toRotationMatrix();
     std::vector<CornerMeasurement> out;
     for (int i = 0; i < 6; ++i) {
@@ -58,7 +53,7 @@ class FrameCornersTest : public ::testing::Test {
             tilt * Eigen::Vector3d(0.12 * (i - 2.5), 0.12 * (j - 2.0), 0.0) +
             Eigen::Vector3d(0.0, 0.0, 1.0);
         CornerMeasurement m;
-        m.p_W = k.R_W_B * (R_B_C * p_C + t_B_C_) + k.p_W_B;
+        m.p_W = k.R_W_B * (R_B_C * p_C + this->t_B_C_) + k.p_W_B;
         m.sigma_px = 0.5 + 0.1 * ((i + j) % 3);
         EXPECT_TRUE(camera.Project(p_C, &m.uv));
         m.uv += noise_px * m.sigma_px * Eigen::Vector2d(gauss(rng), gauss(rng));
@@ -72,22 +67,14 @@ class FrameCornersTest : public ::testing::Test {
 
   std::vector<double*> FrameBlocks(int seg, double* params) {
     typename Frame::Parameters p;
-    p.traj = testing::SegmentBlocks(&spline_, seg);
-    p.q_B_C = q_B_C_.coeffs().data();
-    p.t_B_C = t_B_C_.data();
-    p.time_offset = &offset_;
-    p.params = params;
+    this->SetCameraBlocks(seg, params, &p);
     return Frame::Blocks(p);
   }
 
   std::vector<double*> CornerBlocks(int seg, double* params) {
     typename Corner::Parameters p;
-    p.traj = testing::SegmentBlocks(&spline_, seg);
-    p.q_B_C = q_B_C_.coeffs().data();
-    p.t_B_C = t_B_C_.data();
-    p.time_offset = &offset_;
-    p.line_delay = &line_delay_;
-    p.params = params;
+    this->SetCameraBlocks(seg, params, &p);
+    p.line_delay = &this->line_delay_;
     return Corner::Blocks(p);
   }
 
@@ -99,8 +86,8 @@ class FrameCornersTest : public ::testing::Test {
 
   // Adds every parameter block of the spline and the camera to P with its manifold.
   void AddParameters(ceres::Problem* P, double* params, int num_params) {
-    for (int k = 0; k < spline_.NumKnots(); ++k) {
-      double* d = spline_.KnotData(k);
+    for (int k = 0; k < this->spline_.NumKnots(); ++k) {
+      double* d = this->spline_.KnotData(k);
       if constexpr (Rep == Se3Representation::kJoint) {
         P->AddParameterBlock(d, 7, &se3_);
       } else {
@@ -108,11 +95,11 @@ class FrameCornersTest : public ::testing::Test {
         P->AddParameterBlock(d + 4, 3);
       }
     }
-    P->AddParameterBlock(q_B_C_.coeffs().data(), 4, &left_);
-    P->AddParameterBlock(t_B_C_.data(), 3);
-    P->AddParameterBlock(&offset_, 1);
-    P->AddParameterBlock(&line_delay_, 1);
-    P->SetParameterBlockConstant(&line_delay_);
+    P->AddParameterBlock(this->q_B_C_.coeffs().data(), 4, &left_);
+    P->AddParameterBlock(this->t_B_C_.data(), 3);
+    P->AddParameterBlock(&this->offset_, 1);
+    P->AddParameterBlock(&this->line_delay_, 1);
+    P->SetParameterBlockConstant(&this->line_delay_);
     P->AddParameterBlock(params, num_params);
   }
 
@@ -121,7 +108,7 @@ class FrameCornersTest : public ::testing::Test {
                 const std::vector<CornerMeasurement>& corners, std::int64_t stamp, double huber,
                 double* params) {
     const int seg = SegmentAt(stamp);
-    const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
+    const SegmentClock clock = SegmentClock::At(stamp, this->spline_.timing(), seg);
     if (compressed) {
       P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners, clock, huber), nullptr,
                           FrameBlocks(seg, params));
@@ -134,11 +121,6 @@ class FrameCornersTest : public ::testing::Test {
     }
   }
 
-  Spline spline_;
-  Eigen::Quaterniond q_B_C_;
-  Eigen::Vector3d t_B_C_;
-  double offset_ = 0.0031;
-  double line_delay_ = 0.0;
   So3RightManifold so3_;
   Se3RightManifold se3_;
   So3LeftManifold left_;
@@ -234,7 +216,7 @@ TYPED_TEST(FrameCornersTest, OneSolverStepEqualsPerCorner) {
   const Eigen::VectorXd truth = testing::CameraParams(type);
   const CameraModel camera(type, truth, Eigen::Vector2i(640, 480));
   std::vector<std::pair<std::int64_t, std::vector<CornerMeasurement>>> frames;
-  const std::int64_t span = (kNumKnots - TestFixture::N) * kDtNs - 20'000'000;
+  const std::int64_t span = (this->spline_.NumKnots() - TestFixture::N) * kDtNs - 20'000'000;
   for (int f = 0; f < 40; ++f) {
     const std::int64_t stamp = testing::kT0Ns + 5'000'000 + f * (span / 40);
     frames.emplace_back(stamp, this->Corners(camera, stamp, 1.0, f % 7 == 0 ? 1 : 0, 100 + f));

@@ -16,44 +16,23 @@
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "estimate_agreement.h"
+#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {
 
-// Simulates DATA once per process with the CLI (`ctcal simulate`, the same path users take).
+using test::InputErrorOf;
+using test::Quiet;
+
+// The full scenario of the default rig with table4 guesses, simulated once per process.
 std::string SimulatedData(int seed, double duration) {
-  const std::string dir = ::testing::TempDir() + "/ctcal_spline_" + std::to_string(seed) + "_" +
-                          std::to_string(static_cast<int>(duration));
-  if (!std::filesystem::exists(dir + "/truth.yaml")) {
-    const std::string cmd = std::string(CTCAL_BINARY) + " simulate --scenario full --seed " +
-                            std::to_string(seed) + " --duration " + std::to_string(duration) +
-                            " --perturb table4 --out " + dir + " > /dev/null";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  }
-  return dir;
-}
-
-CalibrationLog Quiet() {
-  return [](const std::string&) {};
-}
-
-struct Loaded {
-  RigConfig rig;
-  RigConfig truth;
-  std::map<std::string, SensorData> data;
-};
-
-Loaded Load(const std::string& dir) {
-  Loaded l;
-  std::vector<std::string> warnings;
-  l.rig = LoadRig(dir + "/rig.yaml", &warnings);
-  l.truth = LoadRig(dir + "/truth.yaml", &warnings);
-  l.data = LoadDataset(dir, l.rig, &warnings);
-  return l;
+  return test::SimulateOnce(
+      "ctcal_spline_" + std::to_string(seed) + "_" + std::to_string(static_cast<int>(duration)),
+      test::FullTable4Args(seed, duration));
 }
 
 TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
-  const Loaded l = Load(SimulatedData(11, 12.0));
+  const test::Recording l = test::LoadRecording(SimulatedData(11, 12.0));
   SplineCalibratorOptions options;
   options.threads = 2;
   const SplineCalibrationResult r = CalibrateSpline(l.rig, l.data, options, Quiet());
@@ -117,7 +96,7 @@ TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
 // estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1 of its sigma; the run
 // without it (Ceres' relative tolerances of 1e-10 only) is the reference.
 TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate) {
-  const Loaded l = Load(SimulatedData(11, 12.0));
+  const test::Recording l = test::LoadRecording(SimulatedData(11, 12.0));
   SplineCalibratorOptions options;
   options.threads = 2;
   options.report_data = false;
@@ -134,18 +113,8 @@ TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate
               fast.iterations, ref.iterations, a.worst);
 }
 
-template <class F>
-std::string InputErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const CalibrationInputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(SplineCalibrator, CameraThatNeverSeesTheBoardIsNamed) {
-  Loaded l = Load(SimulatedData(12, 4.0));
+  test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
   l.data["cam1"].corners.clear();
   const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
   EXPECT_NE(what.find("sensors.cam1"), std::string::npos) << what;
@@ -153,7 +122,7 @@ TEST(SplineCalibrator, CameraThatNeverSeesTheBoardIsNamed) {
 }
 
 TEST(SplineCalibrator, TooFewViewsAreNamed) {
-  Loaded l = Load(SimulatedData(12, 4.0));
+  test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
   auto& corners = l.data["cam0"].corners;
   // Keep the corners of the first 5 frames only.
   std::size_t end = 0;
@@ -171,7 +140,7 @@ TEST(SplineCalibrator, TooFewViewsAreNamed) {
 }
 
 TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
-  Loaded l = Load(SimulatedData(12, 4.0));
+  test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
   for (ImuSample& s : l.data["imu1"].imu)
     s.t_ns += 1000000000000LL;  // 1000 s later
   const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
@@ -183,7 +152,7 @@ TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
 // CalibrationFailure saying it diverged (the iteration callback aborts on a non-finite cost) and
 // naming the sensor whose residuals overflow, never a crash, a hang or a result.
 TEST(SplineCalibrator, DivergingSolveFailsWithOneMessage) {
-  Loaded l = Load(SimulatedData(12, 4.0));
+  test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
   l.rig.Find(l.rig.base_imu)->noise.gyroscope_noise_density = 1e-200;
   SplineCalibratorOptions options;
   options.coarse_init.policy = GuessPolicy::kOff;

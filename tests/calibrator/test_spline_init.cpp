@@ -3,6 +3,7 @@
 // pose within the single-frame PnP precision of 1 px noise (< 1.5 deg, < 2.5 cm; the wrong branch
 // of the planar pose ambiguity is off by several degrees).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,37 +18,62 @@
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/spline/so3.h"
+#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {
 
+// A 3 s recording of the default rig's full scenario, simulated once per process: the truth, the
+// data, the ground truth.
+struct Simulated {
+  RigConfig truth;
+  std::map<std::string, SensorData> data;
+  std::vector<GroundTruthState> gt;
+};
+
+const Simulated& Simulation() {
+  static const Simulated sim = [] {
+    const std::string dir = test::SimulateOnce("ctcal_spline_init_21_" + std::to_string(::getpid()),
+                                               "--scenario full --seed 21 --duration 3");
+    Simulated s;
+    std::vector<std::string> warnings;
+    s.truth = LoadRig(dir + "/truth.yaml", &warnings);
+    s.data = LoadDataset(dir, s.truth, &warnings);
+    s.gt = ReadGroundTruthCsv(dir + "/groundtruth/data.csv");
+    std::filesystem::remove_all(dir);
+    return s;
+  }();
+  return sim;
+}
+
+// The board views of a camera with its TRUE intrinsics, turned into base poses with its true
+// extrinsics and time offset; *num_views counts the views.
+std::vector<TimedPose> TrueBasePoses(const Simulated& sim, const std::string& name,
+                                     std::size_t* num_views = nullptr) {
+  const SensorConfig& c = *sim.truth.Find(name);
+  const CameraModel camera =
+      CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
+                          Eigen::Vector2i(c.width, c.height));
+  const std::vector<BoardView> views =
+      EstimateBoardViews(camera, Board(sim.truth.target), sim.data.at(name).corners, 8);
+  if (num_views)
+    *num_views = views.size();
+  Eigen::Isometry3d T_B_C = Eigen::Isometry3d::Identity();
+  T_B_C.matrix() = c.T_B_S;
+  return BasePosesFromViews(views, T_B_C, c.time_offset);
+}
+
 TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
-  const std::string dir = ::testing::TempDir() + "/ctcal_spline_init_21";
-  const std::string cmd = std::string(CTCAL_BINARY) +
-                          " simulate --scenario full --seed 21 --duration 3 --out " + dir +
-                          " > /dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::vector<std::string> warnings;
-  const RigConfig truth = LoadRig(dir + "/truth.yaml", &warnings);
-  const auto data = LoadDataset(dir, truth, &warnings);
-  const std::vector<GroundTruthState> gt = ReadGroundTruthCsv(dir + "/groundtruth/data.csv");
-  const Board board(truth.target);
+  const Simulated& sim = Simulation();
   for (const char* name : {"cam0", "cam1"}) {
-    const SensorConfig& c = *truth.Find(name);
-    const CameraModel camera =
-        CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
-                            Eigen::Vector2i(c.width, c.height));
-    const std::vector<BoardView> views =
-        EstimateBoardViews(camera, board, data.at(name).corners, 8);
-    ASSERT_GT(views.size(), 40u) << name;
-    Eigen::Isometry3d T_B_C = Eigen::Isometry3d::Identity();
-    T_B_C.matrix() = c.T_B_S;
-    const std::vector<TimedPose> poses = BasePosesFromViews(views, T_B_C, c.time_offset);
+    std::size_t views = 0;
+    const std::vector<TimedPose> poses = TrueBasePoses(sim, name, &views);
+    ASSERT_GT(views, 40u) << name;
     int compared = 0;
     for (const TimedPose& p : poses) {
       // The ground truth is at the base IMU's samples (4 ms apart): take the nearest one, within
       // 2 ms, and its pose at the view's time by its velocity (the rotation moves < 0.2 deg).
-      for (const GroundTruthState& g0 : gt) {
+      for (const GroundTruthState& g0 : sim.gt) {
         if (std::llabs(g0.t_ns - p.t_ns) > 2000000)
           continue;
         GroundTruthState g = g0;
@@ -67,26 +93,12 @@ TEST(SplineInit, BoardViewsGiveTheTrueBasePoses) {
 // poses and the base IMU (corrected by its true intrinsics and biases) must recover the simulated
 // trajectory to the IMU's precision between the views and gravity's direction.
 TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
-  const std::string dir = ::testing::TempDir() + "/ctcal_spline_init_21";
-  const std::string cmd = std::string(CTCAL_BINARY) +
-                          " simulate --scenario full --seed 21 --duration 3 --out " + dir +
-                          " > /dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::vector<std::string> warnings;
-  const RigConfig truth = LoadRig(dir + "/truth.yaml", &warnings);
-  const auto data = LoadDataset(dir, truth, &warnings);
-  const std::vector<GroundTruthState> gt = ReadGroundTruthCsv(dir + "/groundtruth/data.csv");
-  const Board board(truth.target);
+  const Simulated& sim = Simulation();
+  const RigConfig& truth = sim.truth;
+  const std::vector<GroundTruthState>& gt = sim.gt;
   std::vector<TimedPose> poses;
   for (const char* name : {"cam0", "cam1"}) {
-    const SensorConfig& c = *truth.Find(name);
-    const CameraModel camera =
-        CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
-                            Eigen::Vector2i(c.width, c.height));
-    Eigen::Isometry3d T_B_C = Eigen::Isometry3d::Identity();
-    T_B_C.matrix() = c.T_B_S;
-    const std::vector<TimedPose> p = BasePosesFromViews(
-        EstimateBoardViews(camera, board, data.at(name).corners, 8), T_B_C, c.time_offset);
+    const std::vector<TimedPose> p = TrueBasePoses(sim, name);
     poses.insert(poses.end(), p.begin(), p.end());
   }
   std::sort(poses.begin(), poses.end(),
@@ -101,7 +113,7 @@ TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
   for (const GroundTruthState& g : gt)
     truth_at[g.t_ns] = &g;
   std::vector<spline_internal::BaseRateSample> imu;
-  for (const ImuSample& s : data.at(truth.base_imu).imu) {
+  for (const ImuSample& s : sim.data.at(truth.base_imu).imu) {
     const auto it = truth_at.find(s.t_ns);
     ASSERT_NE(it, truth_at.end()) << s.t_ns;
     spline_internal::BaseRateSample z;

@@ -206,5 +206,46 @@ TEST(Compare, MissingSensorOrModelMismatchIsAnError) {
   EXPECT_THROW(CompareRigs(truth, result), std::runtime_error);
 }
 
+// A camera-only result of a visual-inertial truth: its T_B_S are relative to its reference
+// camera, so the truth is compared in that camera's frame (exactly, for an exact result); a base
+// the truth lacks is an error.
+TEST(Compare, ResultWithAnotherBaseIsComparedInItsFrames) {
+  RigConfig truth = Example();
+  SensorConfig cam1 = *truth.Find("cam0");
+  cam1.name = "cam1";
+  cam1.T_B_S.topLeftCorner<3, 3>() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
+      cam1.T_B_S.topLeftCorner<3, 3>();
+  cam1.T_B_S.topRightCorner<3, 1>() += Eigen::Vector3d(0.1, -0.02, 0.03);
+  cam1.time_offset += 0.004;
+  truth.sensors.push_back(cam1);
+  const SensorConfig& cam0 = *truth.Find("cam0");
+
+  RigConfig result;
+  result.base_imu = "cam0";
+  result.target = truth.target;
+  result.sensors = {cam0, cam1};
+  result.sensors[0].T_B_S.setIdentity();
+  result.sensors[0].time_offset = 0.0;
+  result.sensors[0].estimate = {EstimateItem::kIntrinsics};
+  result.sensors[1].T_B_S = cam0.T_B_S.inverse() * cam1.T_B_S;
+  result.sensors[1].time_offset = 0.0;
+  result.sensors[1].estimate = {EstimateItem::kIntrinsics, EstimateItem::kExtrinsics};
+  const Comparison c = CompareRigs(truth, result);
+  ASSERT_EQ(c.rows.size(), 4u + 4u + 4u + 4u + 3u + 3u);
+  for (const ComparisonRow& row : c.rows)
+    EXPECT_NEAR(row.error, 0.0, 1e-12) << row.name;
+
+  result.base_imu = "cam7";
+  result.sensors[0].name = "cam7";
+  try {
+    CompareRigs(truth, result);
+    FAIL() << "a base the truth lacks accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("'cam7' is not a sensor of the truth"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace ctcal

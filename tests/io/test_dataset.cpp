@@ -11,6 +11,7 @@
 
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "io_test_util.h"
 
 namespace ctcal {
 namespace {
@@ -30,16 +31,7 @@ void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
-// Finite doubles over every exponent range, from random bit patterns.
-double RandomDouble(std::mt19937_64& rng) {
-  while (true) {
-    const std::uint64_t bits = rng();
-    double x;
-    std::memcpy(&x, &bits, sizeof(x));
-    if (std::isfinite(x))
-      return x;
-  }
-}
+using test::RandomDouble;
 
 Eigen::Vector3d RandomVec(std::mt19937_64& rng) {
   return Eigen::Vector3d(RandomDouble(rng), RandomDouble(rng), RandomDouble(rng));
@@ -195,6 +187,25 @@ TEST(Dataset, ReadsFilesWithoutHeaderAndWithWindowsLineEnds) {
             "1403636579758555392,-0.099134701513277898,0.14730578886832138,0.02722713633111154,"
             "8.1476917083333333,-0.37592158333333331,-2.4026292499999999\n");
   EXPECT_EQ(ReadImuCsv(dir + "/imu1/data.csv").front().w_m.x(), -0.099134701513277898);
+}
+
+// A blank line ends a file only at its end (tests/data/bad/imu_empty_line.csv: one in the
+// middle stays an error at its own line).
+TEST(Dataset, BlankLinesAtTheEndAreTheEndOfTheFile) {
+  const std::string dir = TempDir("blank");
+  WriteText(dir + "/gyro0/data.csv",
+            "#timestamp [ns],w_x,w_y,w_z [rad/s]\n100,1,2,3\n200,4,5,6\n\n \r\n");
+  const std::vector<GyroSample> s = ReadGyroCsv(dir + "/gyro0/data.csv");
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_EQ(s[1].w_m.z(), 6.0);
+  WriteText(dir + "/gyro1/data.csv", "100,1,2,3\n\n\n200,4,5,6\n");
+  try {
+    ReadGyroCsv(dir + "/gyro1/data.csv");
+    FAIL() << "a blank line between rows accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("gyro1/data.csv:2: empty line"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Dataset, LoaderTakesCornersWithoutImagesAndChecksImagesOtherwise) {

@@ -12,6 +12,7 @@
 
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "io_test_util.h"
 
 namespace ctcal {
 namespace {
@@ -20,6 +21,16 @@ namespace {
 std::vector<std::string> g_warnings;
 
 const std::string kExample = std::string(CTCAL_SOURCE_DIR) + "/configs/example_rig.yaml";
+
+// The message of reading `text` as `file`, or "(read without error)".
+std::string ParseError(const std::string& text, const std::string& file) {
+  try {
+    ParseRigString(text, file, &g_warnings);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "(read without error)";
+}
 
 constexpr char kMinimal[] = R"(
 base_imu: imu0
@@ -37,16 +48,7 @@ sensors:
     resolution: [640, 480]
 )";
 
-// Any finite double, drawn from its bit pattern so that every exponent range is exercised.
-double RandomDouble(std::mt19937_64& rng) {
-  while (true) {
-    const std::uint64_t bits = rng();
-    double x;
-    std::memcpy(&x, &bits, sizeof(x));
-    if (std::isfinite(x))
-      return x;
-  }
-}
+using test::RandomDouble;
 
 Eigen::Matrix3d RandomRotation(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
@@ -341,6 +343,107 @@ TEST(RigYaml, SigmaReadsInfAndNanAsYamlWritesThem) {
   const std::string out = EmitRig(rig);
   EXPECT_NE(out.find(".inf"), std::string::npos);
   EXPECT_NE(out.find(".nan"), std::string::npos);
+}
+
+// SPEC section 2: "Timestamps in files are integer nanoseconds", so a motion window's t0 / t1
+// are written as integers (base clock) and a number with a fraction is refused. (In memory they
+// are seconds, which resolve 0.24 us at unix-epoch stamps; the values here are exact.)
+TEST(RigYaml, MotionWindowsAreIntegerNanosecondsInFiles) {
+  RigConfig rig = RandomResult(1);
+  rig.observability->motion = {
+      {"one_axis_rotation", "imu0", Eigen::Vector3d(0, 0, 1), 1.5, 1'700'000'000.5}};
+  const std::string text = EmitRig(rig);
+  EXPECT_NE(text.find("t0: 1500000000,"), std::string::npos) << text;
+  EXPECT_NE(text.find("t1: 1700000000500000000}"), std::string::npos) << text;
+  EXPECT_TRUE(ParseRigString(text, "emitted", &g_warnings) == rig);
+
+  std::string seconds = text;
+  seconds.replace(seconds.find("t0: 1500000000,"), 15, "t0: 1.5,");
+  const std::string error = ParseError(seconds, "result.yaml");
+  EXPECT_NE(error.find("result.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("observability.motion.t0 (integer nanoseconds)"), std::string::npos)
+      << error;
+}
+
+// SPEC section 7 gives every sensor's T_B_S the sigma keys R_B_S and t_B_S; a gyroscope's
+// position enters no measurement, so its t_B_S (as a SPEC-literal writer gives it) is checked
+// and ignored, with a warning when it would have been a prior.
+TEST(RigYaml, GyroSigmaAndPriorMayCarryATranslation) {
+  std::string text = kMinimal;
+  text += R"(    T_B_S: [[1,0,0,0.1],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+  gyro0:
+    type: gyro
+    noise: {gyroscope_noise_density: 1.0e-4, gyroscope_random_walk: 1.0e-5, update_rate: 200}
+    T_B_S: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+    prior_sigma: {R_B_S: [0.01, 0.01, 0.01], t_B_S: [0.01, 0.01, 0.01], time_offset: 0.01}
+    sigma: {R_B_S: [0.001, 0.001, 0.001], t_B_S: [.inf, .inf, .inf], time_offset: 1.0e-5}
+)";
+  std::vector<std::string> warnings;
+  const RigConfig rig = ParseRigString(text, "gyro.yaml", &warnings);
+  const SensorConfig& gyro = *rig.Find("gyro0");
+  EXPECT_EQ(gyro.prior_sigma.Find("t_B_S"), nullptr);
+  EXPECT_EQ(gyro.sigma.Find("t_B_S"), nullptr);
+  EXPECT_EQ(*gyro.prior_sigma.Find("R_B_S"), (std::vector<double>{0.01, 0.01, 0.01}));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("sensors.gyro0.prior_sigma.t_B_S: ignored"), std::string::npos)
+      << warnings[0];
+
+  std::string bad = text;
+  bad.replace(bad.find("t_B_S: [0.01, 0.01, 0.01]"), 25, "t_B_S: [0.01, 0.01]");
+  const std::string error = ParseError(bad, "gyro.yaml");
+  EXPECT_NE(error.find("sensors.gyro0.prior_sigma.t_B_S"), std::string::npos) << error;
+}
+
+// SPEC section 7: T_B_S and time_offset are for "all but the base". A file that spells out the
+// base's definition (identity, 0) reads as the file without them; another value is an error.
+TEST(RigYaml, BaseMayStateItsIdentityExtrinsicAndZeroOffset) {
+  std::string text = kMinimal;
+  const RigConfig plain = ParseRigString(text, "plain.yaml", &g_warnings);
+  const std::string base_keys = "            update_rate: 200}\n";
+  text.replace(text.find(base_keys), base_keys.size(),
+               base_keys +
+                   "    T_B_S: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, "
+                   "0.0], [0.0, 0.0, 0.0, 1.0]]\n    time_offset: 0.0\n");
+  const RigConfig stated = ParseRigString(text, "stated.yaml", &g_warnings);
+  EXPECT_TRUE(stated == plain);
+  const std::string emitted = EmitRig(stated);  // only cam0 carries the two keys
+  EXPECT_EQ(emitted.find("time_offset:"), emitted.rfind("time_offset:")) << emitted;
+  EXPECT_EQ(emitted.find("T_B_S:"), emitted.rfind("T_B_S:")) << emitted;
+
+  std::string shifted = text;
+  shifted.replace(shifted.find("time_offset: 0.0"), 16, "time_offset: 0.001");
+  const std::string error = ParseError(shifted, "shifted.yaml");
+  EXPECT_NE(error.find("shifted.yaml:"), std::string::npos) << error;
+  EXPECT_NE(error.find("sensors.imu0"), std::string::npos) << error;
+  EXPECT_NE(error.find("time_offset is not allowed on the base"), std::string::npos) << error;
+}
+
+// A drawing's rotation rounded to 4 decimals is taken as the nearest rotation with a warning
+// naming the file, line and key; an exact one is kept bit for bit; a matrix further from a
+// rotation than 1e-3 stays an error.
+TEST(RigYaml, RoundedRotationIsTakenAsTheNearestWithAWarning) {
+  std::string text = kMinimal;
+  text +=
+      "    T_B_S: [[0.9962, -0.0872, 0, 0.1], [0.0872, 0.9962, 0, 0], [0, 0, 1, 0], [0, 0, 0, "
+      "1]]\n";
+  std::vector<std::string> warnings;
+  const RigConfig rig = ParseRigString(text, "drawing.yaml", &warnings);
+  const Eigen::Matrix3d R = rig.Find("cam0")->T_B_S.topLeftCorner<3, 3>();
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 1e-14);
+  EXPECT_NEAR(R(0, 0), 0.9962, 1e-4);
+  EXPECT_NEAR(R(1, 0), 0.0872, 1e-4);
+  EXPECT_EQ(rig.Find("cam0")->T_B_S(0, 3), 0.1);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("drawing.yaml:15: warning: sensors.cam0.T_B_S: rotation not "
+                             "orthonormal"),
+            std::string::npos)
+      << warnings[0];
+
+  std::string far = text;
+  far.replace(far.find("0.9962, -0.0872"), 15, "0.9862, -0.0872");
+  const std::string error = ParseError(far, "far.yaml");
+  EXPECT_NE(error.find("far.yaml:15:"), std::string::npos) << error;
+  EXPECT_NE(error.find("not a rigid transform"), std::string::npos) << error;
 }
 
 TEST(RigYaml, CameraOnlyRigHasNoTimeOffsets) {

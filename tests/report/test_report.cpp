@@ -348,5 +348,22 @@ TEST_F(ReportTest, CommandLine) {
   EXPECT_NE(text.find("ctcal report: error: "), std::string::npos) << text;
 }
 
+// A `calibrate --method both` folder holds a full result in spline/ and discrete/ and none at the
+// top: `ctcal report --out OUT` re-renders both.
+TEST_F(ReportTest, CommandLineRendersBothMethodsOfABothFolder) {
+  const std::string bin = CTCAL_BINARY;
+  if (!fs::exists(bin))
+    GTEST_SKIP() << "ctcal not built at " << bin;
+  test::MakeSyntheticOut(dir_ + "/spline");
+  test::MakeSyntheticOut(dir_ + "/discrete");
+  ASSERT_FALSE(fs::exists(dir_ + "/result.yaml"));
+  EXPECT_EQ(std::system((bin + " report --out " + dir_ + " >/dev/null").c_str()), 0);
+  for (const char* method : {"/spline", "/discrete"}) {
+    EXPECT_TRUE(fs::exists(dir_ + method + "/report.html")) << method;
+    EXPECT_TRUE(fs::exists(dir_ + method + "/report.pdf")) << method;
+  }
+  EXPECT_FALSE(fs::exists(dir_ + "/report.html"));
+}
+
 }  // namespace
 }  // namespace ctcal::report

@@ -15,15 +15,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// EuRoC's ADIS16448 figures as Kalibr's imu.yaml for EuRoC gives them.
 InertialNoise Euroc() {
-  InertialNoise n;
-  n.gyroscope_noise_density = 1.6968e-04;
-  n.gyroscope_random_walk = 1.9393e-05;
-  n.accelerometer_noise_density = 2.0000e-3;
-  n.accelerometer_random_walk = 3.0000e-3;
-  n.update_rate = 200.0;
-  return n;
+  return EurocAdis16448Noise(200.0);
 }
 
 TEST(InertialNoise, DiscreteWhiteNoiseSigma) {

@@ -2,12 +2,16 @@
 // readers, byte-identical reruns, and one clear error line for bad options.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
+#include "../apps/cli_test_util.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/sim/default_rig.h"
@@ -17,30 +21,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = 0;
-  std::string out;
-  std::string err;
-};
+using test::Slurp;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-Result RunCtcal(const std::string& args) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "ctcal_sim_cli";
-  fs::create_directories(dir);
-  const std::string cmd = std::string(CTCAL_BINARY) + " simulate " + args + " >" +
-                          (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(dir / "out.txt");
-  r.err = Slurp(dir / "err.txt");
-  return r;
+test::CliRun RunCtcal(const std::string& args) {
+  // One folder per process: ctest -j runs the tests of this file in parallel processes.
+  return test::RunCtcal("simulate " + args,
+                        ::testing::TempDir() + "/ctcal_sim_cli_" + std::to_string(::getpid()));
 }
 
 class SimulateCli : public ::testing::Test {
@@ -68,9 +54,9 @@ std::map<std::string, std::string> Files(const fs::path& dir) {
 }
 
 TEST_F(SimulateCli, SameSeedSameBytesOtherSeedOtherData) {
-  ASSERT_EQ(RunCtcal("--scenario full --seed 7 --duration 3 --out " + Dir("a")).exit_code, 0);
-  ASSERT_EQ(RunCtcal("--scenario full --seed 7 --duration 3 --out " + Dir("b")).exit_code, 0);
-  ASSERT_EQ(RunCtcal("--scenario full --seed 8 --duration 3 --out " + Dir("c")).exit_code, 0);
+  ASSERT_EQ(RunCtcal("--scenario full --seed 7 --duration 3 --out " + Dir("a")).code, 0);
+  ASSERT_EQ(RunCtcal("--scenario full --seed 7 --duration 3 --out " + Dir("b")).code, 0);
+  ASSERT_EQ(RunCtcal("--scenario full --seed 8 --duration 3 --out " + Dir("c")).code, 0);
   const auto a = Files(Dir("a")), b = Files(Dir("b")), c = Files(Dir("c"));
   EXPECT_EQ(a.size(), 14u);  // 5 sensors x 2 files, groundtruth, 3 yaml files
   EXPECT_EQ(a, b);
@@ -82,9 +68,9 @@ TEST_F(SimulateCli, SameSeedSameBytesOtherSeedOtherData) {
 }
 
 TEST_F(SimulateCli, WritesTheSpecLayoutThatTheReadersAccept) {
-  const Result r =
+  const test::CliRun r =
       RunCtcal("--scenario yaw --seed 1 --duration 2 --perturb table4 --out " + Dir("d"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("cam0"), std::string::npos);  // progress on the terminal
   const RigConfig truth = LoadRig(Dir("d") + "/truth.yaml");
   ASSERT_TRUE(truth.gravity_W.has_value());
@@ -121,16 +107,17 @@ TEST_F(SimulateCli, SimulatesAUserRig) {
   rig.sensors.erase(rig.sensors.begin() + 2);  // no gyro0
   fs::create_directories(root_);
   SaveRig(rig, Dir("user.yaml"));
-  const Result r = RunCtcal("--scenario planar --seed 2 --duration 1 --rig " + Dir("user.yaml") +
-                            " --out " + Dir("e"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::CliRun r = RunCtcal("--scenario planar --seed 2 --duration 1 --rig " +
+                                  Dir("user.yaml") + " --out " + Dir("e"));
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(fs::exists(Dir("e") + "/gyro0"));
   EXPECT_EQ(LoadRig(Dir("e") + "/truth.yaml").Find("cam0")->line_delay, 2e-5);
 }
 
 TEST_F(SimulateCli, ImagesReplaceTheCornersByRenderedFrames) {
-  const Result r = RunCtcal("--scenario full --seed 3 --duration 0.2 --images --out " + Dir("i"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::CliRun r =
+      RunCtcal("--scenario full --seed 3 --duration 0.2 --images --out " + Dir("i"));
+  ASSERT_EQ(r.code, 0) << r.err;
   for (const std::string cam : {"cam0", "cam1"}) {
     EXPECT_FALSE(fs::exists(Dir("i") + "/" + cam + "/corners.csv"));
     const auto truth = ReadCornersCsv(Dir("i") + "/" + cam + "/corners_true.csv", 144);
@@ -140,6 +127,24 @@ TEST_F(SimulateCli, ImagesReplaceTheCornersByRenderedFrames) {
     const auto images = ReadImageCsv(Dir("i") + "/" + cam + "/data.csv", /*check_images=*/true);
     EXPECT_GE(images.size(), 4u);
   }
+}
+
+// Simulating into a folder of an earlier run that this run would leave half stale is one clear
+// error: corners.csv beside new rendered images (calibrate would not detect), or rendered images
+// beside new corners.csv (detect would use the old images).
+TEST_F(SimulateCli, RefusesToLeaveAnEarlierRunsCameraFilesStale) {
+  ASSERT_EQ(RunCtcal("--scenario full --seed 3 --duration 0.2 --images --out " + Dir("i")).code, 0);
+  test::CliRun r = RunCtcal("--scenario full --seed 4 --duration 0.2 --out " + Dir("i"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("cam0 holds an earlier --images run"), std::string::npos) << r.err;
+
+  ASSERT_EQ(RunCtcal("--scenario full --seed 3 --duration 0.2 --out " + Dir("c")).code, 0);
+  r = RunCtcal("--scenario full --seed 4 --duration 0.2 --images --out " + Dir("c"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cam0/corners.csv is from an earlier run"), std::string::npos) << r.err;
+  // The same kind of run again simply rewrites its files.
+  EXPECT_EQ(RunCtcal("--scenario full --seed 5 --duration 0.2 --out " + Dir("c")).code, 0);
 }
 
 TEST_F(SimulateCli, BadOptionsGiveOneClearLine) {
@@ -160,13 +165,13 @@ TEST_F(SimulateCli, BadOptionsGiveOneClearLine) {
       {"--scenario full --seed -1 --out " + Dir("x"), "--seed must be an integer"},
   };
   for (const auto& c : cases) {
-    const Result r = RunCtcal(c.args);
-    EXPECT_EQ(r.exit_code, 2) << c.args;
+    const test::CliRun r = RunCtcal(c.args);
+    EXPECT_EQ(r.code, 2) << c.args;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << "\n" << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_EQ(r.err.rfind("ctcal simulate: error: ", 0), 0u) << r.err;
   }
-  EXPECT_EQ(RunCtcal("--help").exit_code, 0);
+  EXPECT_EQ(RunCtcal("--help").code, 0);
 }
 
 }  // namespace

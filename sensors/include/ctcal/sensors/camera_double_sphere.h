@@ -65,10 +65,6 @@ struct DoubleSphereModel {
     using std::sqrt;
     const T& xi = params[0];
     const T& alpha = params[1];
-    const T& fu = params[2];
-    const T& fv = params[3];
-    const T& pu = params[4];
-    const T& pv = params[5];
     const T& x = p_C.x();
     const T& y = p_C.y();
     const T& z = p_C.z();
@@ -85,40 +81,24 @@ struct DoubleSphereModel {
     const T den = alpha * d2 + (T(1) - alpha) * k;
     if (!(den > T(0)))
       return false;
-    const T mx = x / den;
-    const T my = y / den;
-    (*uv)(0) = fu * mx + pu;
-    (*uv)(1) = fv * my + pv;
-
+    Eigen::Matrix<T, 1, 3> J_den_p = Eigen::Matrix<T, 1, 3>::Zero();
+    Eigen::Matrix<T, 1, 2> J_den_xi_alpha = Eigen::Matrix<T, 1, 2>::Zero();
     if (J_uv_p) {
       // d k/d p = xi p/d1 + e_z;  d d2/d p = ((x, y, 0) + k d k/d p) / d2;
-      // d den/d p = alpha d d2/d p + (1 - alpha) d k/d p;  d (x/den)/d p = (e_x - mx d den/d
-      // p)/den.
+      // d den/d p = alpha d d2/d p + (1 - alpha) d k/d p.
       Eigen::Matrix<T, 1, 3> J_k_p = (xi / d1) * p_C.transpose();
       J_k_p(2) += T(1);
       Eigen::Matrix<T, 1, 3> J_d2_p = (k / d2) * J_k_p;
       J_d2_p(0) += x / d2;
       J_d2_p(1) += y / d2;
-      const Eigen::Matrix<T, 1, 3> J_den_p = alpha * J_d2_p + (T(1) - alpha) * J_k_p;
-      Eigen::Matrix<T, 2, 3> J_m_p = -Eigen::Matrix<T, 2, 1>(mx, my) * J_den_p;
-      J_m_p(0, 0) += T(1);
-      J_m_p(1, 1) += T(1);
-      *J_uv_p = Eigen::Matrix<T, 2, 1>(fu / den, fv / den).asDiagonal() * J_m_p;
+      J_den_p = alpha * J_d2_p + (T(1) - alpha) * J_k_p;
     }
     if (J_uv_params) {
       // d den/d xi = (alpha k/d2 + 1 - alpha) d1;  d den/d alpha = d2 - k.
-      const T den_xi = (alpha * k / d2 + T(1) - alpha) * d1;
-      const T den_alpha = d2 - k;
-      J_uv_params->setZero();
-      (*J_uv_params)(0, 0) = -fu * mx / den * den_xi;
-      (*J_uv_params)(1, 0) = -fv * my / den * den_xi;
-      (*J_uv_params)(0, 1) = -fu * mx / den * den_alpha;
-      (*J_uv_params)(1, 1) = -fv * my / den * den_alpha;
-      (*J_uv_params)(0, 2) = mx;
-      (*J_uv_params)(1, 3) = my;
-      (*J_uv_params)(0, 4) = T(1);
-      (*J_uv_params)(1, 5) = T(1);
+      J_den_xi_alpha << (alpha * k / d2 + T(1) - alpha) * d1, d2 - k;
     }
+    camera_internal::ProjectOverDenominator(params, p_C, den, J_den_p, J_den_xi_alpha, uv, J_uv_p,
+                                            J_uv_params);
     return true;
   }
 

@@ -64,10 +64,6 @@ struct EucmModel {
     using std::sqrt;
     const T& alpha = params[0];
     const T& beta = params[1];
-    const T& fu = params[2];
-    const T& fv = params[3];
-    const T& pu = params[4];
-    const T& pv = params[5];
     const T& x = p_C.x();
     const T& y = p_C.y();
     const T& z = p_C.z();
@@ -82,34 +78,18 @@ struct EucmModel {
     const T den = alpha * rho + (T(1) - alpha) * z;
     if (!(den > T(0)))
       return false;
-    const T mx = x / den;
-    const T my = y / den;
-    (*uv)(0) = fu * mx + pu;
-    (*uv)(1) = fv * my + pv;
-
+    Eigen::Matrix<T, 1, 3> J_den_p = Eigen::Matrix<T, 1, 3>::Zero();
+    Eigen::Matrix<T, 1, 2> J_den_alpha_beta = Eigen::Matrix<T, 1, 2>::Zero();
     if (J_uv_p) {
       // d rho/d p = (beta x, beta y, z)/rho;  d den/d p = alpha d rho/d p + (1 - alpha) e_z.
-      Eigen::Matrix<T, 1, 3> J_den_p;
       J_den_p << alpha * beta * x / rho, alpha * beta * y / rho, alpha * z / rho + T(1) - alpha;
-      Eigen::Matrix<T, 2, 3> J_m_p = -Eigen::Matrix<T, 2, 1>(mx, my) * J_den_p;
-      J_m_p(0, 0) += T(1);
-      J_m_p(1, 1) += T(1);
-      *J_uv_p = Eigen::Matrix<T, 2, 1>(fu / den, fv / den).asDiagonal() * J_m_p;
     }
     if (J_uv_params) {
       // d den/d alpha = rho - z;  d den/d beta = alpha r2 / (2 rho).
-      const T den_alpha = rho - z;
-      const T den_beta = alpha * r2 / (T(2) * rho);
-      J_uv_params->setZero();
-      (*J_uv_params)(0, 0) = -fu * mx / den * den_alpha;
-      (*J_uv_params)(1, 0) = -fv * my / den * den_alpha;
-      (*J_uv_params)(0, 1) = -fu * mx / den * den_beta;
-      (*J_uv_params)(1, 1) = -fv * my / den * den_beta;
-      (*J_uv_params)(0, 2) = mx;
-      (*J_uv_params)(1, 3) = my;
-      (*J_uv_params)(0, 4) = T(1);
-      (*J_uv_params)(1, 5) = T(1);
+      J_den_alpha_beta << rho - z, alpha * r2 / (T(2) * rho);
     }
+    camera_internal::ProjectOverDenominator(params, p_C, den, J_den_p, J_den_alpha_beta, uv, J_uv_p,
+                                            J_uv_params);
     return true;
   }
 

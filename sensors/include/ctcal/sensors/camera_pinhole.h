@@ -45,6 +45,35 @@ inline bool CheckFinite(const double* params, int n, std::string* why) {
   return true;
 }
 
+// The last step of the models that divide the point by one scalar den(p, a, b) (double sphere,
+// EUCM; params [a, b, fu, fv, pu, pv]):
+//   m = (x, y) / den,  uv = (fu mx + pu, fv my + pv)
+//   d m/d p = ([I2 0] - m d den/d p) / den,  d m/d a = -m d den/d a / den  (likewise b).
+// J_den_p and J_den_ab are read only where J_uv_p and J_uv_params are wanted.
+template <typename T>
+void ProjectOverDenominator(const T* params, const Eigen::Matrix<T, 3, 1>& p_C, const T& den,
+                            const Eigen::Matrix<T, 1, 3>& J_den_p,
+                            const Eigen::Matrix<T, 1, 2>& J_den_ab, Eigen::Matrix<T, 2, 1>* uv,
+                            JacobianPtr<T, 2, 3> J_uv_p, JacobianPtr<T, 2, 6> J_uv_params) {
+  const Eigen::Matrix<T, 2, 1> f(params[2], params[3]);
+  const Eigen::Matrix<T, 2, 1> m = p_C.template head<2>() / den;
+  *uv = f.cwiseProduct(m) + Eigen::Matrix<T, 2, 1>(params[4], params[5]);
+  if (J_uv_p) {
+    Eigen::Matrix<T, 2, 3> J_m_p = -m * J_den_p;
+    J_m_p(0, 0) += T(1);
+    J_m_p(1, 1) += T(1);
+    *J_uv_p = (f / den).asDiagonal() * J_m_p;
+  }
+  if (J_uv_params) {
+    J_uv_params->setZero();
+    J_uv_params->template leftCols<2>() = -(f.cwiseProduct(m) / den) * J_den_ab;
+    (*J_uv_params)(0, 2) = m(0);
+    (*J_uv_params)(1, 3) = m(1);
+    (*J_uv_params)(0, 4) = T(1);
+    (*J_uv_params)(1, 5) = T(1);
+  }
+}
+
 }  // namespace camera_internal
 
 // Pinhole projection, params [fu, fv, pu, pv, distortion_coeffs...] (Kalibr's PinholeProjection):

@@ -51,6 +51,8 @@ struct Comparison {
 };
 
 // Throws std::runtime_error when the truth lacks a sensor or parameter the result estimates.
+// A result whose base is another sensor of the truth (e.g. the reference camera of a camera-only
+// calibration) is compared with the truth re-expressed in that sensor's frame and clock.
 Comparison CompareRigs(const RigConfig& truth, const RigConfig& result);
 
 // The human-readable table with its summary lines.

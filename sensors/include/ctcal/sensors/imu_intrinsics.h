@@ -87,6 +87,20 @@ Vec3T<T> SolveScale(MatrixForm f, const Mat3T<T>& D, const Vec3T<T>& v) {
   return D.inverse() * v;
 }
 
+// The model's matrices at the blocks: identity for an absent scale matrix or rotation, zero for
+// an absent T_g.
+template <typename T>
+struct Matrices {
+  Matrices(const ImuModelLayout& L, const ImuBlocks<T>& p)
+      : R_I_w(RotationOf<T>(L.rotation, ImuRotation::kR_I_w, p.q_rotation)),
+        R_I_a(RotationOf<T>(L.rotation, ImuRotation::kR_I_a, p.q_rotation)),
+        D_w(MatrixFromStored<T>(L.Dw, p.Dw, Mat3T<T>::Identity())),
+        D_a(MatrixFromStored<T>(L.Da, p.Da, Mat3T<T>::Identity())),
+        T_g(MatrixFromStored<T>(L.Tg, p.Tg, Mat3T<T>::Zero())) {}
+
+  Mat3T<T> R_I_w, R_I_a, D_w, D_a, T_g;
+};
+
 }  // namespace imu_detail
 
 // Measurement model, true -> raw (noise-free), any scalar. Derivation: the sensor's gyroscope
@@ -98,14 +112,10 @@ template <typename T>
 void ImuRawFromTrue(const ImuModelLayout& L, const ImuBlocks<T>& p, const Vec3T<T>& w_I,
                     const Vec3T<T>& a_I, const Vec3T<T>& b_g, const Vec3T<T>& b_a, Vec3T<T>* w_m,
                     Vec3T<T>* a_m) {
-  const Mat3T<T> I3 = Mat3T<T>::Identity();
-  const Mat3T<T> R_I_w = imu_detail::RotationOf<T>(L.rotation, ImuRotation::kR_I_w, p.q_rotation);
-  const Mat3T<T> R_I_a = imu_detail::RotationOf<T>(L.rotation, ImuRotation::kR_I_a, p.q_rotation);
-  const Mat3T<T> D_w = MatrixFromStored<T>(L.Dw, p.Dw, I3);
-  const Mat3T<T> D_a = MatrixFromStored<T>(L.Da, p.Da, I3);
-  const Mat3T<T> T_g = MatrixFromStored<T>(L.Tg, p.Tg, Mat3T<T>::Zero());
-  *w_m = imu_detail::SolveScale<T>(L.Dw, D_w, Vec3T<T>(R_I_w.transpose() * w_I)) + T_g * a_I + b_g;
-  *a_m = imu_detail::SolveScale<T>(L.Da, D_a, Vec3T<T>(R_I_a.transpose() * a_I)) + b_a;
+  const imu_detail::Matrices<T> M(L, p);
+  *w_m = imu_detail::SolveScale<T>(L.Dw, M.D_w, Vec3T<T>(M.R_I_w.transpose() * w_I)) + M.T_g * a_I +
+         b_g;
+  *a_m = imu_detail::SolveScale<T>(L.Da, M.D_a, Vec3T<T>(M.R_I_a.transpose() * a_I)) + b_a;
 }
 
 // Correction, raw -> true, any scalar: the SPEC's state equations read left to right. The
@@ -114,14 +124,9 @@ template <typename T>
 void ImuTrueFromRaw(const ImuModelLayout& L, const ImuBlocks<T>& p, const Vec3T<T>& w_m,
                     const Vec3T<T>& a_m, const Vec3T<T>& b_g, const Vec3T<T>& b_a, Vec3T<T>* w_I,
                     Vec3T<T>* a_I) {
-  const Mat3T<T> I3 = Mat3T<T>::Identity();
-  const Mat3T<T> R_I_w = imu_detail::RotationOf<T>(L.rotation, ImuRotation::kR_I_w, p.q_rotation);
-  const Mat3T<T> R_I_a = imu_detail::RotationOf<T>(L.rotation, ImuRotation::kR_I_a, p.q_rotation);
-  const Mat3T<T> D_w = MatrixFromStored<T>(L.Dw, p.Dw, I3);
-  const Mat3T<T> D_a = MatrixFromStored<T>(L.Da, p.Da, I3);
-  const Mat3T<T> T_g = MatrixFromStored<T>(L.Tg, p.Tg, Mat3T<T>::Zero());
-  *a_I = R_I_a * (D_a * (a_m - b_a));
-  *w_I = R_I_w * (D_w * (w_m - b_g - T_g * *a_I));
+  const imu_detail::Matrices<T> M(L, p);
+  *a_I = M.R_I_a * (M.D_a * (a_m - b_a));
+  *w_I = M.R_I_w * (M.D_w * (w_m - b_g - M.T_g * *a_I));
 }
 
 // Jacobians of a stacked 6-vector out = [w; a] with respect to a matrix block: one column per

@@ -40,4 +40,16 @@ struct InertialNoise {
   double AccelBiasRateWeight() const { return 1.0 / accelerometer_random_walk; }
 };
 
+// EuRoC's ADIS16448 as Kalibr's imu.yaml for EuRoC gives it (Table 4 of the MVIS paper), sampled
+// at rate_hz: the simulator's default rig and a plausible IMU for tests.
+inline InertialNoise EurocAdis16448Noise(double rate_hz) {
+  InertialNoise n;
+  n.gyroscope_noise_density = 1.6968e-04;
+  n.gyroscope_random_walk = 1.9393e-05;
+  n.accelerometer_noise_density = 2.0e-3;
+  n.accelerometer_random_walk = 3.0e-3;
+  n.update_rate = rate_hz;
+  return n;
+}
+
 }  // namespace ctcal

@@ -83,6 +83,17 @@ Mat3T<T> Se3Q(const Vec3T<T>& rho, const Vec3T<T>& phi) {
          c3 * (PRP * P + P * PRP);
 }
 
+// [A, B; 0, A]: the shape of SE(3)'s adjoints and Jacobians in the [rho; phi] order.
+template <typename T>
+Mat6T<T> UpperBlockTriangular(const Mat3T<T>& A, const Mat3T<T>& B) {
+  Mat6T<T> M;
+  M.template topLeftCorner<3, 3>() = A;
+  M.template topRightCorner<3, 3>() = B;
+  M.template bottomLeftCorner<3, 3>().setZero();
+  M.template bottomRightCorner<3, 3>() = A;
+  return M;
+}
+
 }  // namespace internal
 
 template <typename T>
@@ -104,49 +115,29 @@ Vec6T<T> LogSE3(const PoseT<T>& pose) {
 
 template <typename T>
 Mat6T<T> AdjointSE3(const PoseT<T>& pose) {
-  Mat6T<T> A;
-  A.template topLeftCorner<3, 3>() = pose.R;
-  A.template topRightCorner<3, 3>() = Hat<T>(pose.t) * pose.R;
-  A.template bottomLeftCorner<3, 3>().setZero();
-  A.template bottomRightCorner<3, 3>() = pose.R;
-  return A;
+  return internal::UpperBlockTriangular<T>(pose.R, Hat<T>(pose.t) * pose.R);
 }
 
 // ad(xi) y = [xi, y], the Lie bracket: for SO(3) the cross product.
 template <typename T>
 Mat6T<T> SmallAdjointSE3(const Vec6T<T>& xi) {
-  Mat6T<T> a;
-  const Mat3T<T> P = Hat<T>(xi.template tail<3>());
-  a.template topLeftCorner<3, 3>() = P;
-  a.template topRightCorner<3, 3>() = Hat<T>(xi.template head<3>());
-  a.template bottomLeftCorner<3, 3>().setZero();
-  a.template bottomRightCorner<3, 3>() = P;
-  return a;
+  return internal::UpperBlockTriangular<T>(Hat<T>(xi.template tail<3>()),
+                                           Hat<T>(xi.template head<3>()));
 }
 
 template <typename T>
 Mat6T<T> LeftJacobianSE3(const Vec6T<T>& xi) {
   const Vec3T<T> phi = xi.template tail<3>();
-  Mat6T<T> J;
-  const Mat3T<T> Jl = LeftJacobianSO3<T>(phi);
-  J.template topLeftCorner<3, 3>() = Jl;
-  J.template topRightCorner<3, 3>() = internal::Se3Q<T>(xi.template head<3>(), phi);
-  J.template bottomLeftCorner<3, 3>().setZero();
-  J.template bottomRightCorner<3, 3>() = Jl;
-  return J;
+  return internal::UpperBlockTriangular<T>(LeftJacobianSO3<T>(phi),
+                                           internal::Se3Q<T>(xi.template head<3>(), phi));
 }
 
 template <typename T>
 Mat6T<T> LeftJacobianInvSE3(const Vec6T<T>& xi) {
   const Vec3T<T> phi = xi.template tail<3>();
-  Mat6T<T> J;
   const Mat3T<T> Jl_inv = LeftJacobianInvSO3<T>(phi);
-  J.template topLeftCorner<3, 3>() = Jl_inv;
-  J.template topRightCorner<3, 3>() =
-      -Jl_inv * internal::Se3Q<T>(xi.template head<3>(), phi) * Jl_inv;
-  J.template bottomLeftCorner<3, 3>().setZero();
-  J.template bottomRightCorner<3, 3>() = Jl_inv;
-  return J;
+  return internal::UpperBlockTriangular<T>(
+      Jl_inv, -Jl_inv * internal::Se3Q<T>(xi.template head<3>(), phi) * Jl_inv);
 }
 
 template <typename T>

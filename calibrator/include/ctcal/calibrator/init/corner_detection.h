@@ -30,6 +30,15 @@ struct CameraDetectionSummary {
   std::string summary;                           // one line, also logged
 };
 
+// The detector's results on one camera's images (results[i] of images[i]) as corners in SPEC
+// section 6 rows: the image's stamp, the corner id, the pixel and the detector's sigma. Fills the
+// counts of `summary` (images, unreadable and the first error, with_board, corners, rejected),
+// leaving its camera, time and line alone. The one conversion of the detection stage and of
+// `ctcal detect`.
+std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntry>& images,
+                                                     const std::vector<DetectionResult>& results,
+                                                     CameraDetectionSummary* summary);
+
 // Detects the board in every image of one camera (`image_dir`/<filename> for each entry of
 // `images`, the camera's data.csv) and returns the corners in SPEC section 6 rows: the image's
 // stamp, the corner id, the pixel and the detector's sigma. Logs progress per tenth of the
