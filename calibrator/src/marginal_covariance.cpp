@@ -1,5 +1,6 @@
 #include "ctcal/calibrator/marginal_covariance.h"
 
+#include <ceres/cost_function.h>
 #include <ceres/crs_matrix.h>
 
 #include <Eigen/CholmodSupport>
@@ -67,21 +68,33 @@ MarginalInformation ComputeMarginalInformation(
     problem.GetResidualBlocks(&all_residuals);
 
   // H = J^T J accumulated over chunks of residual blocks: the whole Jacobian (and its transpose)
-  // of a long recording would hold hundreds of MB at once (docs/performance.md, memory).
+  // of a long recording would hold hundreds of MB at once (docs/performance.md, memory). A chunk
+  // holds at most kChunkValues Jacobian values (16 MB; ~2000 camera-frame or 5000 IMU-sample
+  // blocks, ~150 compressed inertial blocks of 1 kHz data).
   const int n = out.nuisance_dimension;
   const int c = static_cast<int>(units.size());
   // With threads > 1 a chunk's J^T J is summed on a second thread while the next chunk is
   // evaluated (Problem::Evaluate is not re-entrant): the same sums in the same order, and at most
   // two chunks' Jacobians alive.
-  constexpr std::size_t kChunk = 4096;
+  constexpr std::size_t kChunkValues = std::size_t{1} << 21;
+  const auto jacobian_values = [&](ceres::ResidualBlockId id) {
+    const ceres::CostFunction* f = problem.GetCostFunctionForResidualBlock(id);
+    std::size_t cols = 0;
+    for (const int size : f->parameter_block_sizes())
+      cols += static_cast<std::size_t>(size);
+    return cols * static_cast<std::size_t>(f->num_residuals());
+  };
   SparseColMajor H(n + c, n + c);
   const auto accumulate = [&H](const ceres::CRSMatrix& crs) {
     const SparseRowMajor J = ToEigen(crs);
     H += SparseColMajor(SparseColMajor(J.transpose()) * J);
   };
   std::future<void> summing;
-  for (std::size_t first = 0; first < all_residuals.size(); first += kChunk) {
-    const std::size_t last = std::min(all_residuals.size(), first + kChunk);
+  for (std::size_t first = 0, last = 0; first < all_residuals.size(); first = last) {
+    std::size_t values = 0;
+    for (last = first; last < all_residuals.size() && (last == first || values < kChunkValues);
+         ++last)
+      values += jacobian_values(all_residuals[last]);
     eval.residual_blocks.assign(all_residuals.begin() + static_cast<std::ptrdiff_t>(first),
                                 all_residuals.begin() + static_cast<std::ptrdiff_t>(last));
     double cost = 0.0;

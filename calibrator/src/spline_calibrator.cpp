@@ -333,13 +333,12 @@ std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
   return ids;
 }
 
-void FinishResult(
-    ceres::Problem& problem, CalibrationState& state,
-    const std::vector<ceres::ResidualBlockId>& prior_ids,
-    const std::vector<CornerResiduals>& corners,
-    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
-    const SplineCalibratorOptions& options, const CalibrationLog& log,
-    SplineCalibrationResult* out) {
+void FinishResult(ceres::Problem& problem, CalibrationState& state,
+                  const std::vector<ceres::ResidualBlockId>& prior_ids,
+                  const std::vector<CornerResiduals>& corners,
+                  const std::vector<InertialResidualSums>& inertial,
+                  const SplineCalibratorOptions& options, const CalibrationLog& log,
+                  SplineCalibrationResult* out) {
   RigConfig& result = out->result;
   const std::optional<SolverSummary> solver = result.solver;
   result = state.ToRig();
@@ -361,23 +360,16 @@ void FinishResult(
     r.rms_px = std::sqrt(raw / n);
     result.residuals[c.camera] = r;
   }
-  for (const auto& [name, ids] : inertial_ids) {
+  for (const InertialResidualSums& in : inertial) {
+    const std::string& name = in.sensor;
     SensorResiduals r;
     const SensorState* s = state.Find(name);
     const InertialNoise& noise = s->config.noise;
     const bool imu = s->config.type == SensorType::kImu;
     const int m = imu ? 6 : 3;
-    double wg = 0.0, wa = 0.0;
-    for (const ceres::ResidualBlockId id : ids) {
-      double e[6];
-      problem.EvaluateResidualBlock(id, false, nullptr, e, nullptr);
-      for (int i = 0; i < 3; ++i)
-        wg += e[i] * e[i];
-      for (int i = 3; i < m; ++i)
-        wa += e[i] * e[i];
-    }
-    const double n = std::max<double>(1.0, static_cast<double>(ids.size()));
-    r.count = static_cast<std::int64_t>(m * ids.size());
+    const double wg = in.gyro, wa = in.accel;
+    const double n = std::max<double>(1.0, static_cast<double>(in.samples));
+    r.count = static_cast<std::int64_t>(m * in.samples);
     r.rms_whitened_gyro = std::sqrt(wg / (3.0 * n));
     r.rms_gyro = *r.rms_whitened_gyro * noise.GyroSampleSigma();
     if (imu) {

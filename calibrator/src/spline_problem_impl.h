@@ -29,6 +29,7 @@ using residual_internal::Jacobian;
 }  // namespace ctcal
 
 #include "ctcal/calibrator/residuals/frame_corners_residual.h"
+#include "ctcal/calibrator/residuals/inertial_block_residual.h"
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
@@ -65,6 +66,14 @@ struct CornerResiduals {
   std::string camera;
   std::vector<Eigen::Vector2d> whitened;
   std::vector<double> sigma_px;
+};
+
+// The squared whitened residuals of one inertial sensor's samples, summed (the statistics).
+struct InertialResidualSums {
+  std::string sensor;
+  double gyro = 0.0;   // over the gyroscope's 3 rows of every sample
+  double accel = 0.0;  // over the accelerometer's 3 rows (IMUs only)
+  std::int64_t samples = 0;
 };
 
 struct PreparedInertial {
@@ -122,13 +131,12 @@ std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
 void LogOutliers(const std::vector<CameraOutliers>& outliers, double outlier_probability,
                  const CalibrationLog& log);
 
-void FinishResult(
-    ceres::Problem& problem, CalibrationState& state,
-    const std::vector<ceres::ResidualBlockId>& prior_ids,
-    const std::vector<CornerResiduals>& corners,
-    const std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>>& inertial_ids,
-    const SplineCalibratorOptions& options, const CalibrationLog& log,
-    SplineCalibrationResult* out);
+void FinishResult(ceres::Problem& problem, CalibrationState& state,
+                  const std::vector<ceres::ResidualBlockId>& prior_ids,
+                  const std::vector<CornerResiduals>& corners,
+                  const std::vector<InertialResidualSums>& inertial,
+                  const SplineCalibratorOptions& options, const CalibrationLog& log,
+                  SplineCalibrationResult* out);
 
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback);
@@ -408,7 +416,25 @@ class SplineProblem {
         c.sigma_px.push_back(cam.corners[i].sigma_px);
       }
     });
-    FinishResult(*problem_, state_, prior_ids_, corners, inertial_ids_, options_, log_, out);
+    // Inertial samples one by one too (the problem may hold them compressed per run of segments).
+    std::vector<InertialResidualSums> inertial;
+    for (PreparedInertial& in : prep_.inertial) {
+      InertialResidualSums sums;
+      sums.sensor = in.state->name();
+      VisitSamples(in, [&](auto& set, auto&& blocks_of) {
+        using R = typename std::decay_t<decltype(set)>::Residual;
+        double r[R::kNumResiduals];
+        for (std::size_t i = 0; i < set.functors.size(); ++i) {
+          const std::vector<double*> blocks = blocks_of(set.seg[i], set.bseg[i]);
+          R::Analytic::EvaluateSample(set.functors[i], blocks.data(), r, nullptr);
+          for (int k = 0; k < R::kNumResiduals; ++k)
+            (k < 3 ? sums.gyro : sums.accel) += r[k] * r[k];
+        }
+        sums.samples += static_cast<std::int64_t>(set.functors.size());
+      });
+      inertial.push_back(sums);
+    }
+    FinishResult(*problem_, state_, prior_ids_, corners, inertial, options_, log_, out);
   }
 
   // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
@@ -595,34 +621,65 @@ class SplineProblem {
     }
   }
 
-  void AddInertial(PreparedInertial& in) {
+  // A sensor's samples as functors of their residual class R, with each sample's trajectory and
+  // bias segment; `blocks(seg, bseg)` lists a sample's parameter blocks (R::Blocks) and `sizes`
+  // their ambient sizes (R::BlockSizes).
+  template <class R>
+  struct SampleSetOf {
+    using Residual = R;
+    std::vector<typename R::Functor> functors;
+    std::vector<int> seg;
+    std::vector<int> bseg;
+    std::vector<int> sizes;
+  };
+
+  // Calls f(set, blocks) for the sensor's IMU samples and for its gyro samples (those present),
+  // in time order, the segments following the current time offset.
+  template <class F>
+  void VisitSamples(PreparedInertial& in, F&& f) {
     SensorState& s = *in.state;
-    std::vector<ceres::ResidualBlockId> ids;
     const InertialNoise& noise = s.config.noise;
     const double shift = s.is_base ? 0.0 : s.time_offset;
-    for (const ImuSample& z : in.imu) {
-      const int seg = SegmentOf(z.t_ns, shift);
-      segments_.push_back(seg);
-      const int bseg = BiasSegmentOf(s.bias_gyro, z.t_ns);
-      ImuSampleSetup setup;
-      setup.layout = s.imu->layout();
-      setup.z.w_m = z.w_m;
-      setup.z.a_m = z.a_m;
-      setup.W = ImuWhitening::Of(noise);
-      setup.clock = SegmentClock::At(z.t_ns, spline_.timing(), seg);
-      setup.bias_clock = SegmentClock::At(z.t_ns, s.bias_gyro.timing, bseg);
-      if (s.is_base) {
-        typename BaseImuResidual<N, Rep, Nb>::Parameters p;
+    const auto locate = [&](std::int64_t t_ns, auto* set, SegmentClock* clock,
+                            SegmentClock* bias_clock) {
+      const int seg = SegmentOf(t_ns, shift);
+      const int bseg = BiasSegmentOf(s.bias_gyro, t_ns);
+      set->seg.push_back(seg);
+      set->bseg.push_back(bseg);
+      *clock = SegmentClock::At(t_ns, spline_.timing(), seg);
+      *bias_clock = SegmentClock::At(t_ns, s.bias_gyro.timing, bseg);
+    };
+    const auto imu_set = [&](auto* set) {
+      set->sizes = std::decay_t<decltype(*set)>::Residual::BlockSizes(s.imu->layout());
+      for (const ImuSample& z : in.imu) {
+        ImuSampleSetup setup;
+        setup.layout = s.imu->layout();
+        setup.z.w_m = z.w_m;
+        setup.z.a_m = z.a_m;
+        setup.W = ImuWhitening::Of(noise);
+        locate(z.t_ns, set, &setup.clock, &setup.bias_clock);
+        set->functors.emplace_back(setup);
+      }
+    };
+    if (!in.imu.empty() && s.is_base) {
+      using R = BaseImuResidual<N, Rep, Nb>;
+      SampleSetOf<R> set;
+      imu_set(&set);
+      f(set, [&](int seg, int bseg) {
+        typename R::Parameters p;
         p.traj = TrajBlocks(seg);
         p.g_W = state_.g_W();
         p.bg = BiasBlocks(s.bias_gyro, bseg);
         p.ba = BiasBlocks(s.bias_accel, bseg);
         p.intrinsics = &*s.imu;
-        ids.push_back(
-            problem_->AddResidualBlock(MakeBaseImuResidual<N, Rep, Nb>(options_.analytic, setup),
-                                       nullptr, BaseImuResidual<N, Rep, Nb>::Blocks(p)));
-      } else {
-        typename AuxImuResidual<N, Rep, Nb>::Parameters p;
+        return R::Blocks(p);
+      });
+    } else if (!in.imu.empty()) {
+      using R = AuxImuResidual<N, Rep, Nb>;
+      SampleSetOf<R> set;
+      imu_set(&set);
+      f(set, [&](int seg, int bseg) {
+        typename R::Parameters p;
         p.traj = TrajBlocks(seg);
         p.g_W = state_.g_W();
         p.q_B_S = s.q_B_S.data();
@@ -631,31 +688,115 @@ class SplineProblem {
         p.bg = BiasBlocks(s.bias_gyro, bseg);
         p.ba = BiasBlocks(s.bias_accel, bseg);
         p.intrinsics = &*s.imu;
-        ids.push_back(
-            problem_->AddResidualBlock(MakeAuxImuResidual<N, Rep, Nb>(options_.analytic, setup),
-                                       nullptr, AuxImuResidual<N, Rep, Nb>::Blocks(p)));
+        return R::Blocks(p);
+      });
+    }
+    if (!in.gyro.empty()) {
+      using R = AuxGyroResidual<N, Rep, Nb>;
+      SampleSetOf<R> set;
+      set.sizes = R::BlockSizes(s.gyro->model());
+      for (const GyroSample& z : in.gyro) {
+        GyroSampleSetup setup;
+        setup.model = s.gyro->model();
+        setup.w_m = z.w_m;
+        setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
+        locate(z.t_ns, &set, &setup.clock, &setup.bias_clock);
+        set.functors.push_back(typename R::Functor{setup});
       }
+      f(set, [&](int seg, int bseg) {
+        typename R::Parameters p;
+        p.traj = TrajBlocks(seg);
+        p.q_B_S = s.q_B_S.data();
+        p.time_offset = &s.time_offset;
+        p.bg = BiasBlocks(s.bias_gyro, bseg);
+        p.intrinsics = &*s.gyro;
+        return R::Blocks(p);
+      });
     }
-    for (const GyroSample& z : in.gyro) {
-      const int seg = SegmentOf(z.t_ns, shift);
-      segments_.push_back(seg);
-      const int bseg = BiasSegmentOf(s.bias_gyro, z.t_ns);
-      GyroSampleSetup setup;
-      setup.model = s.gyro->model();
-      setup.w_m = z.w_m;
-      setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
-      setup.clock = SegmentClock::At(z.t_ns, spline_.timing(), seg);
-      setup.bias_clock = SegmentClock::At(z.t_ns, s.bias_gyro.timing, bseg);
-      typename AuxGyroResidual<N, Rep, Nb>::Parameters p;
-      p.traj = TrajBlocks(seg);
-      p.q_B_S = s.q_B_S.data();
-      p.time_offset = &s.time_offset;
-      p.bg = BiasBlocks(s.bias_gyro, bseg);
-      p.intrinsics = &*s.gyro;
-      ids.push_back(
-          problem_->AddResidualBlock(MakeAuxGyroResidual<N, Rep, Nb>(options_.analytic, setup),
-                                     nullptr, AuxGyroResidual<N, Rep, Nb>::Blocks(p)));
+  }
+
+  // The run length of the sensor's compressed blocks (inertial_block_residual.h), 0 for one block
+  // per sample: from the sensor's rate unless SplineCalibratorOptions forces it.
+  template <class Set>
+  int InertialSegments(const Set& set, const std::vector<double*>& common) const {
+    using R = typename Set::Residual;
+    if (!options_.analytic || !options_.compress_inertial || set.seg.size() < 2)
+      return 0;
+    if (options_.inertial_block_segments > 0)
+      return std::min(options_.inertial_block_segments, 255);
+    const double span_segments = static_cast<double>(set.seg.back() - set.seg.front() + 1);
+    const double per_segment = static_cast<double>(set.seg.size()) / span_segments;
+    int cols = 0, rank = 0;
+    for (std::size_t b = R::kNumTrajBlocks; b < set.sizes.size(); ++b) {
+      cols += set.sizes[b];
+      rank += CommonRank(common[b - R::kNumTrajBlocks], set.sizes[b]);
     }
+    return InertialBlockSegments(per_segment, R::kNumResiduals, N, cols, rank);
+  }
+
+  // The manifold a residual lifts a shared block's Jacobian with (the left rotations), nullptr
+  // for the others (gravity's Jacobian is the plain ambient one).
+  const ceres::Manifold* LiftedManifold(double* block) const {
+    // Bias knots enter the problem with their first residual: not known to it yet, Euclidean.
+    return problem_->HasParameterBlock(block) && problem_->GetManifold(block) == &so3_left_
+               ? &so3_left_
+               : nullptr;
+  }
+  int CommonRank(double* block, int size) const {
+    return LiftedManifold(block) != nullptr ? 3 : size;
+  }
+
+  void AddInertial(PreparedInertial& in) {
+    SensorState& s = *in.state;
+    const InertialNoise& noise = s.config.noise;
+    std::vector<ceres::ResidualBlockId> ids;
+    VisitSamples(in, [&](auto& set, auto&& blocks_of) {
+      using R = typename std::decay_t<decltype(set)>::Residual;
+      segments_.insert(segments_.end(), set.seg.begin(), set.seg.end());
+      const std::size_t count = set.functors.size();
+      std::vector<double*> first = blocks_of(set.seg.front(), set.bseg.front());
+      const std::vector<double*> common(first.begin() + R::kNumTrajBlocks, first.end());
+      const int K = InertialSegments(set, common);
+      if (K == 0) {
+        for (std::size_t i = 0; i < count; ++i) {
+          const typename R::Setup& setup = set.functors[i].s;
+          ceres::CostFunction* cost =
+              options_.analytic ? new typename R::Analytic(setup) : R::MakeAutoDiff(setup);
+          ids.push_back(
+              problem_->AddResidualBlock(cost, nullptr, blocks_of(set.seg[i], set.bseg[i])));
+        }
+        return;
+      }
+      // Runs of at most K segments whose samples share one bias segment.
+      std::size_t begin = 0;
+      while (begin < count) {
+        std::size_t end = begin + 1;
+        while (end < count && set.bseg[end] == set.bseg[begin] &&
+               set.seg[end] - set.seg[begin] < K && set.seg[end] >= set.seg[end - 1])
+          ++end;
+        const int first_seg = set.seg[begin];
+        const int num_segments = set.seg[end - 1] - first_seg + 1;
+        std::vector<typename R::Functor> functors(
+            std::make_move_iterator(set.functors.begin() + static_cast<std::ptrdiff_t>(begin)),
+            std::make_move_iterator(set.functors.begin() + static_cast<std::ptrdiff_t>(end)));
+        std::vector<std::uint8_t> offsets;
+        for (std::size_t i = begin; i < end; ++i)
+          offsets.push_back(static_cast<std::uint8_t>(set.seg[i] - first_seg));
+        const std::vector<double*> sample = blocks_of(first_seg, set.bseg[begin]);
+        std::vector<double*> blocks =
+            InertialBlockResidual<R>::TrajectoryBlocks(spline_, first_seg, num_segments);
+        std::vector<const ceres::Manifold*> manifolds;
+        for (std::size_t b = R::kNumTrajBlocks; b < sample.size(); ++b) {
+          blocks.push_back(sample[b]);
+          manifolds.push_back(LiftedManifold(sample[b]));
+        }
+        ids.push_back(problem_->AddResidualBlock(
+            new InertialBlockResidual<R>(std::move(functors), std::move(offsets), num_segments,
+                                         set.sizes, manifolds, 0.0),
+            nullptr, blocks));
+        begin = end;
+      }
+    });
     // Bias random walks between consecutive knots (these are part of the inertial model, kept
     // with the sensor's residuals but not in its residual statistics).
     const double dt_b = s.bias_gyro.timing.dt_s();

@@ -114,9 +114,16 @@ class AuxGyroResidual {
     }
 
     bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+      return EvaluateSample(f_, p, residuals, jacobians);
+    }
+
+    // One sample at the analytic price: this cost function's evaluation, also called per sample by
+    // the compressed blocks (inertial_block_residual.h), which keep only the Functor of a sample.
+    static bool EvaluateSample(const Functor& f, double const* const* p, double* residuals,
+                               double** jacobians) {
       using namespace residual_internal;
       using Block = typename Spline::template Jacobians<double>::Block;
-      const Setup& s = f_.s;
+      const Setup& s = f.s;
       const bool want_traj = AnyWanted(jacobians, 0, kNumTrajBlocks);
       const bool want_time = Wanted(jacobians, kTimeOffset);
       Se3Kinematics<double> kin;
@@ -132,7 +139,7 @@ class AuxGyroResidual {
       const Eigen::Vector3d b_g = RdSpline<3, Nb>::template EvaluateSegment<double>(
           p + kBg, s.bias_clock.U(), s.bias_clock.inv_dt, 0, &beta);
 
-      const int kDwSlot = f_.HasDw() ? kDw : -1;
+      const int kDwSlot = f.HasDw() ? kDw : -1;
       GyroMatrixJacobian J_out_Dw;
       Eigen::Matrix3d J_out_in;
       GyroJacobians J;
@@ -140,7 +147,7 @@ class AuxGyroResidual {
         J.J_out_in = &J_out_in;
         J.J_out_Dw = Wanted(jacobians, kDwSlot) ? &J_out_Dw : nullptr;
       }
-      const double* Dw = f_.HasDw() ? p[kDw] : nullptr;
+      const double* Dw = f.HasDw() ? p[kDw] : nullptr;
       const Eigen::Vector3d w_pred = GyroRawFromTrue(s.model, Dw, M * kin.w_B, b_g, J);
       Eigen::Map<Eigen::Vector3d> r(residuals);
       r = (s.w_m - w_pred) * s.inv_sigma;

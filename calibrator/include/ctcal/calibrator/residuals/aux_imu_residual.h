@@ -120,6 +120,13 @@ class AuxImuResidual {
     }
 
     bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+      return EvaluateSample(f_, p, residuals, jacobians);
+    }
+
+    // One sample at the analytic price: this cost function's evaluation, also called per sample by
+    // the compressed blocks (inertial_block_residual.h), which keep only the Functor of a sample.
+    static bool EvaluateSample(const Functor& f, double const* const* p, double* residuals,
+                               double** jacobians) {
       using namespace residual_internal;
       using Block = typename Spline::template Jacobians<double>::Block;
       const bool want_traj = AnyWanted(jacobians, 0, kNumTrajBlocks);
@@ -131,8 +138,8 @@ class AuxImuResidual {
       J_kin.J_w_knots = &J_w_knots;
       J_kin.J_alpha_knots = &J_alpha_knots;
       J_kin.J_f_knots = &J_f_knots;
-      Spline::template EvaluateSegment<double>(p, f_.s.clock.U(p[kTimeOffset][0]),
-                                               f_.s.clock.inv_dt, want_time ? 3 : 2, &g_W, &kin,
+      Spline::template EvaluateSegment<double>(p, f.s.clock.U(p[kTimeOffset][0]), f.s.clock.inv_dt,
+                                               want_time ? 3 : 2, &g_W, &kin,
                                                want_traj ? &J_kin : nullptr);
 
       const Eigen::Matrix3d M =
@@ -144,7 +151,7 @@ class AuxImuResidual {
       const Eigen::Vector3d A = f_B + alpha.cross(r) + w.cross(w.cross(r));
 
       Eigen::Matrix<double, 6, 6> J_r_in;
-      f_.Part().Evaluate(p, M * w, M * A, residuals, jacobians, &J_r_in);
+      f.Part().Evaluate(p, M * w, M * A, residuals, jacobians, &J_r_in);
       if (jacobians == nullptr)
         return true;
       const Eigen::Matrix<double, 6, 3> J_r_w = J_r_in.leftCols<3>() * M;

@@ -102,6 +102,13 @@ class BaseImuResidual {
     }
 
     bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+      return EvaluateSample(f_, p, residuals, jacobians);
+    }
+
+    // One sample at the analytic price: this cost function's evaluation, also called per sample by
+    // the compressed blocks (inertial_block_residual.h), which keep only the Functor of a sample.
+    static bool EvaluateSample(const Functor& f, double const* const* p, double* residuals,
+                               double** jacobians) {
       using namespace residual_internal;
       using Block = typename Spline::template Jacobians<double>::Block;
       const bool want_traj = AnyWanted(jacobians, 0, kNumTrajBlocks);
@@ -111,10 +118,10 @@ class BaseImuResidual {
       typename Spline::template Jacobians<double> J_kin;
       J_kin.J_w_knots = &J_w_knots;
       J_kin.J_f_knots = &J_f_knots;
-      Spline::template EvaluateSegment<double>(p, f_.s.clock.U(), f_.s.clock.inv_dt, 2, &g_W, &kin,
+      Spline::template EvaluateSegment<double>(p, f.s.clock.U(), f.s.clock.inv_dt, 2, &g_W, &kin,
                                                want_traj ? &J_kin : nullptr);
       Eigen::Matrix<double, 6, 6> J_r_in;
-      f_.Part().Evaluate(p, kin.w_B, kin.SpecificForce(g_W), residuals, jacobians, &J_r_in);
+      f.Part().Evaluate(p, kin.w_B, kin.SpecificForce(g_W), residuals, jacobians, &J_r_in);
       if (jacobians == nullptr)
         return true;
       if (want_traj) {

@@ -1,0 +1,364 @@
+// InertialBlockResidual (the compressed block of one inertial sensor's samples over a run of
+// spline segments) against the per-sample blocks it replaces, for the base IMU, an auxiliary IMU
+// and an auxiliary gyroscope at 1 kHz on 20 ms knots (20 samples per segment), runs that cross
+// bias segments: the cost, the gradient and the Gauss-Newton Hessian of a Ceres problem (tangent
+// space, as Ceres sees them) are equal to 1e-9 relative, in L2 and with the Huber loss, also with
+// intrinsic blocks held constant; and the run length rule compresses a 1 kHz IMU but not the demo's
+// 250 Hz one.
+#include "ctcal/calibrator/residuals/inertial_block_residual.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+
+#include "ctcal/calibrator/residuals/aux_gyro_residual.h"
+#include "ctcal/calibrator/residuals/aux_imu_residual.h"
+#include "ctcal/calibrator/residuals/base_imu_residual.h"
+#include "residual_test_utils.h"
+
+namespace ctcal {
+namespace {
+
+constexpr std::int64_t kDtNs = 20'000'000;       // trajectory knots, 20 ms
+constexpr std::int64_t kBiasDtNs = 130'000'000;  // bias knots: runs cross bias segments
+constexpr std::int64_t kSampleDtNs = 1'000'000;  // 1 kHz
+constexpr int kNumKnots = 24;
+
+enum class Kind { kBaseImu, kAuxImu, kAuxGyro };
+
+const char* Name(Kind k) {
+  return k == Kind::kBaseImu ? "base IMU" : k == Kind::kAuxImu ? "aux IMU" : "aux gyro";
+}
+
+template <typename C>
+class InertialBlockTest : public ::testing::Test {
+ protected:
+  static constexpr int N = C::N;
+  static constexpr Se3Representation Rep = C::Rep;
+  static constexpr int Nb = C::Nb;
+  using Spline = Se3Spline<N, Rep>;
+  using Base = BaseImuResidual<N, Rep, Nb>;
+  using AuxImu = AuxImuResidual<N, Rep, Nb>;
+  using AuxGyro = AuxGyroResidual<N, Rep, Nb>;
+
+  InertialBlockTest()
+      : spline_(testing::MakeTrajectory<N, Rep>(kNumKnots, kDtNs, 31)),
+        bg_(testing::MakeBias<Nb>(8, kBiasDtNs, 0.01, 32)),
+        ba_(testing::MakeBias<Nb>(8, kBiasDtNs, 0.1, 33)),
+        g_W_(Eigen::Vector3d(-0.2, 0.1, -9.7).normalized() * 9.81),
+        imu_(testing::RandomImuIntrinsics(ImuModel::kImu2, GSensitivity::kFull, 34)),
+        gyro_(GyroModel::kUpper) {
+    std::mt19937 rng(35);
+    q_B_S_ = testing::RandomRotation(&rng, 2.0);
+    t_B_S_ = Eigen::Vector3d(0.12, -0.07, 0.05);
+    noise_.gyroscope_noise_density = 1.7e-4;
+    noise_.gyroscope_random_walk = 2e-5;
+    noise_.accelerometer_noise_density = 2e-3;
+    noise_.accelerometer_random_walk = 3e-3;
+    noise_.update_rate = 1000.0;
+  }
+
+  // Stamps of the samples: 1 kHz over the spline's range minus a margin for the time offset.
+  std::vector<std::int64_t> Stamps() const {
+    std::vector<std::int64_t> t;
+    const std::int64_t end = testing::kT0Ns + (kNumKnots - N) * kDtNs - 15'000'000;
+    for (std::int64_t s = testing::kT0Ns + 12'000'000; s < end; s += kSampleDtNs)
+      t.push_back(s);
+    return t;
+  }
+
+  int SegmentOf(std::int64_t t_ns, double shift) const {
+    const double s = (1e-9 * static_cast<double>(t_ns - testing::kT0Ns) + shift) / (1e-9 * kDtNs);
+    return std::min(std::max(static_cast<int>(std::floor(s)), 0), spline_.NumSegments() - 1);
+  }
+  int BiasSegmentOf(std::int64_t t_ns) const {
+    return static_cast<int>((t_ns - testing::kT0Ns) / kBiasDtNs);
+  }
+
+  // One sensor's samples as functors of R with their segments, measurements = the model's
+  // prediction at the current values plus white noise (sigma 1 after whitening) and, every
+  // 50th sample, a 10-sigma outlier (the Huber case).
+  template <class R>
+  struct Samples {
+    std::vector<typename R::Functor> functors;
+    std::vector<int> seg, bseg;
+    std::vector<int> sizes;
+  };
+
+  template <class R, class MakeSetup>
+  Samples<R> MakeSamples(double shift, std::vector<int> sizes, MakeSetup make_setup) {
+    std::mt19937 rng(36);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    Samples<R> out;
+    out.sizes = std::move(sizes);
+    int i = 0;
+    for (const std::int64_t t : Stamps()) {
+      const int seg = SegmentOf(t, shift);
+      const int bseg = BiasSegmentOf(t);
+      typename R::Setup setup = make_setup();
+      setup.clock = SegmentClock::At(t, spline_.timing(), seg);
+      setup.bias_clock = SegmentClock::At(t, bg_.timing(), bseg);
+      // r = W (z - pred): with z = 0 the residual gives the prediction.
+      double r[R::kNumResiduals];
+      const std::vector<double*> blocks = BlocksOf<R>(seg, bseg);
+      EXPECT_TRUE(
+          R::Analytic::EvaluateSample(typename R::Functor{setup}, blocks.data(), r, nullptr));
+      for (int k = 0; k < R::kNumResiduals; ++k) {
+        const double outlier = (i % 50 == 7) ? 10.0 : 0.0;
+        Measured(&setup, k) =
+            -r[k] / Whitening(setup, k) + (gauss(rng) + outlier) / Whitening(setup, k);
+      }
+      out.functors.push_back(typename R::Functor{setup});
+      out.seg.push_back(seg);
+      out.bseg.push_back(bseg);
+      ++i;
+    }
+    return out;
+  }
+
+  static double& Measured(ImuSampleSetup* s, int k) {
+    return k < 3 ? s->z.w_m(k) : s->z.a_m(k - 3);
+  }
+  static double& Measured(GyroSampleSetup* s, int k) { return s->w_m(k); }
+  static double Whitening(const ImuSampleSetup& s, int k) {
+    return k < 3 ? s.W.inv_sigma_gyro : s.W.inv_sigma_accel;
+  }
+  static double Whitening(const GyroSampleSetup& s, int) { return s.inv_sigma; }
+
+  template <class R>
+  std::vector<double*> BlocksOf(int seg, int bseg) {
+    typename R::Parameters p;
+    p.traj = testing::SegmentBlocks(&spline_, seg);
+    p.bg = testing::BiasBlocks(&bg_, bseg);
+    if constexpr (std::is_same_v<R, AuxGyro>) {
+      p.q_B_S = q_B_S_.coeffs().data();
+      p.time_offset = &offset_;
+      p.intrinsics = &gyro_;
+    } else {
+      p.g_W = g_W_.data();
+      p.ba = testing::BiasBlocks(&ba_, bseg);
+      p.intrinsics = &imu_;
+      if constexpr (std::is_same_v<R, AuxImu>) {
+        p.q_B_S = q_B_S_.coeffs().data();
+        p.t_B_S = t_B_S_.data();
+        p.time_offset = &offset_;
+      }
+    }
+    return R::Blocks(p);
+  }
+
+  // Every parameter block with its manifold, in one fixed order (the columns of both problems).
+  void AddParameters(ceres::Problem* P) {
+    for (int k = 0; k < spline_.NumKnots(); ++k) {
+      double* d = spline_.KnotData(k);
+      if constexpr (Rep == Se3Representation::kJoint) {
+        P->AddParameterBlock(d, 7, &se3_);
+      } else {
+        P->AddParameterBlock(d, 4, &so3_);
+        P->AddParameterBlock(d + 4, 3);
+      }
+    }
+    P->AddParameterBlock(g_W_.data(), 3, &sphere_);
+    P->AddParameterBlock(q_B_S_.coeffs().data(), 4, &left_);
+    P->AddParameterBlock(t_B_S_.data(), 3);
+    P->AddParameterBlock(&offset_, 1);
+    for (int k = 0; k < bg_.NumKnots(); ++k) {
+      P->AddParameterBlock(bg_.KnotData(k), 3);
+      P->AddParameterBlock(ba_.KnotData(k), 3);
+    }
+    for (double* b : {imu_.Dw(), imu_.Da(), imu_.Tg()}) {
+      if (b != nullptr)
+        P->AddParameterBlock(b, SizeOf(b));
+    }
+    if (imu_.q_rotation() != nullptr)
+      P->AddParameterBlock(imu_.q_rotation(), 4, &left_);
+    P->AddParameterBlock(gyro_.Dw(), gyro_.DwSize());
+  }
+
+  int SizeOf(const double* b) const {
+    const ImuModelLayout& L = imu_.layout();
+    if (b == imu_.Dw())
+      return StoredSize(L.Dw);
+    if (b == imu_.Da())
+      return StoredSize(L.Da);
+    return StoredSize(L.Tg);
+  }
+
+  // Per-sample blocks (K = 0) or compressed blocks of K segments over the same samples.
+  template <class R>
+  void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber) {
+    const std::size_t n = s.functors.size();
+    if (K == 0) {
+      for (std::size_t i = 0; i < n; ++i) {
+        P->AddResidualBlock(new typename R::Analytic(s.functors[i].s),
+                            huber > 0.0 ? new ceres::HuberLoss(huber) : nullptr,
+                            BlocksOf<R>(s.seg[i], s.bseg[i]));
+      }
+      return;
+    }
+    std::size_t begin = 0;
+    while (begin < n) {
+      std::size_t end = begin + 1;
+      while (end < n && s.bseg[end] == s.bseg[begin] && s.seg[end] - s.seg[begin] < K)
+        ++end;
+      const int first = s.seg[begin];
+      const int segments = s.seg[end - 1] - first + 1;
+      std::vector<typename R::Functor> f(s.functors.begin() + static_cast<std::ptrdiff_t>(begin),
+                                         s.functors.begin() + static_cast<std::ptrdiff_t>(end));
+      std::vector<std::uint8_t> offsets;
+      for (std::size_t i = begin; i < end; ++i)
+        offsets.push_back(static_cast<std::uint8_t>(s.seg[i] - first));
+      const std::vector<double*> sample = BlocksOf<R>(first, s.bseg[begin]);
+      std::vector<double*> blocks =
+          InertialBlockResidual<R>::TrajectoryBlocks(spline_, first, segments);
+      std::vector<const ceres::Manifold*> manifolds;
+      for (std::size_t b = R::kNumTrajBlocks; b < sample.size(); ++b) {
+        blocks.push_back(sample[b]);
+        const bool rotation = sample[b] == q_B_S_.coeffs().data() || sample[b] == imu_.q_rotation();
+        manifolds.push_back(rotation ? &left_ : nullptr);
+      }
+      P->AddResidualBlock(new InertialBlockResidual<R>(std::move(f), std::move(offsets), segments,
+                                                       s.sizes, manifolds, huber),
+                          nullptr, blocks);
+      begin = end;
+    }
+  }
+
+  struct Eval {
+    double cost = 0.0;
+    Eigen::VectorXd gradient;
+    Eigen::MatrixXd H;
+  };
+
+  template <class R>
+  Eval Evaluate(const Samples<R>& s, int K, double huber, bool intrinsics_constant) {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem P(po);
+    AddParameters(&P);
+    AddSamples<R>(&P, s, K, huber);
+    if (intrinsics_constant) {
+      for (double* b : {imu_.Dw(), imu_.Da(), imu_.Tg(), imu_.q_rotation(), gyro_.Dw()}) {
+        if (b != nullptr)
+          P.SetParameterBlockConstant(b);
+      }
+    }
+    ceres::Problem::EvaluateOptions eo;
+    std::vector<double*> all;
+    P.GetParameterBlocks(&all);
+    for (double* b : all) {
+      std::vector<ceres::ResidualBlockId> users;
+      P.GetResidualBlocksForParameterBlock(b, &users);
+      if (!users.empty())
+        eo.parameter_blocks.push_back(b);  // the same columns in both problems
+    }
+    Eval e;
+    std::vector<double> g;
+    ceres::CRSMatrix crs;
+    EXPECT_TRUE(P.Evaluate(eo, &e.cost, nullptr, &g, &crs));
+    e.gradient = Eigen::Map<const Eigen::VectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int r = 0; r < crs.num_rows; ++r) {
+      for (int i = crs.rows[r]; i < crs.rows[r + 1]; ++i)
+        J(r, crs.cols[i]) = crs.values[i];
+    }
+    e.H = J.transpose() * J;
+    return e;
+  }
+
+  // Cost, gradient and Hessian equal; the Hessian compared after scaling by its diagonal, so
+  // that the small intrinsic and bias entries are held to the same relative tolerance as the
+  // knots'.
+  template <class R>
+  void ExpectEqual(const Samples<R>& s, int K, double huber, bool constant, const char* what) {
+    SCOPED_TRACE(std::string(what) + " K " + std::to_string(K) + " huber " + std::to_string(huber) +
+                 (constant ? " intrinsics constant" : ""));
+    const Eval a = Evaluate<R>(s, 0, huber, constant);
+    const Eval b = Evaluate<R>(s, K, huber, constant);
+    EXPECT_GT(a.cost, 0.3 * static_cast<double>(s.functors.size()));  // noise: far from zero
+    EXPECT_NEAR(b.cost, a.cost, 1e-10 * a.cost);
+    ASSERT_EQ(a.gradient.size(), b.gradient.size());
+    EXPECT_LT((b.gradient - a.gradient).cwiseAbs().maxCoeff(),
+              1e-9 * a.gradient.cwiseAbs().maxCoeff());
+    const Eigen::VectorXd d = a.H.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd diff = d.asDiagonal() * (b.H - a.H) * d.asDiagonal();
+    EXPECT_LT(testing::MaxAbs(diff), 1e-9);
+    EXPECT_LT(testing::MaxAbs(a.H.diagonal() - b.H.diagonal()),
+              1e-9 * testing::MaxAbs(a.H.diagonal()));
+  }
+
+  Samples<Base> BaseSamples() {
+    return MakeSamples<Base>(0.0, Base::BlockSizes(imu_.layout()), [&] {
+      ImuSampleSetup s;
+      s.layout = imu_.layout();
+      s.W = ImuWhitening::Of(noise_);
+      return s;
+    });
+  }
+  Samples<AuxImu> AuxImuSamples() {
+    return MakeSamples<AuxImu>(offset_, AuxImu::BlockSizes(imu_.layout()), [&] {
+      ImuSampleSetup s;
+      s.layout = imu_.layout();
+      s.W = ImuWhitening::Of(noise_);
+      return s;
+    });
+  }
+  Samples<AuxGyro> AuxGyroSamples() {
+    return MakeSamples<AuxGyro>(offset_, AuxGyro::BlockSizes(gyro_.model()), [&] {
+      GyroSampleSetup s;
+      s.model = gyro_.model();
+      s.inv_sigma = 1.0 / noise_.GyroSampleSigma();
+      return s;
+    });
+  }
+
+  Spline spline_;
+  RdSpline<3, Nb> bg_;
+  RdSpline<3, Nb> ba_;
+  Eigen::Vector3d g_W_;
+  Eigen::Quaterniond q_B_S_;
+  Eigen::Vector3d t_B_S_;
+  double offset_ = 0.0047;
+  ImuIntrinsics imu_;
+  GyroIntrinsics gyro_;
+  InertialNoise noise_;
+  So3RightManifold so3_;
+  Se3RightManifold se3_;
+  So3LeftManifold left_;
+  ceres::SphereManifold<3> sphere_;
+};
+
+using Configs = ::testing::Types<testing::InertialConfig<4, Se3Representation::kSplit, 2>,
+                                 testing::InertialConfig<5, Se3Representation::kJoint, 3>>;
+TYPED_TEST_SUITE(InertialBlockTest, Configs);
+
+TYPED_TEST(InertialBlockTest, CostGradientAndHessianEqualPerSample) {
+  const auto base = this->BaseSamples();
+  const auto aux = this->AuxImuSamples();
+  const auto gyro = this->AuxGyroSamples();
+  for (const int K : {1, 4}) {
+    for (const double huber : {0.0, 3.0}) {
+      for (const bool constant : {false, true}) {
+        this->ExpectEqual(base, K, huber, constant, Name(Kind::kBaseImu));
+        this->ExpectEqual(aux, K, huber, constant, Name(Kind::kAuxImu));
+        this->ExpectEqual(gyro, K, huber, constant, Name(Kind::kAuxGyro));
+      }
+    }
+  }
+}
+
+// The run length rule (InertialBlockSegments) on the base IMU of the default rig (imu2, full
+// g-sensitivity: gravity 3 + biases 12 + intrinsics 25 ambient columns, rank 39), cubic spline,
+// 0.029 s knots: compressed at 1 kHz (29 samples per segment), per-sample blocks at the demo's
+// 250 Hz (7.25), where a compressed block would not halve Ceres' J^T J work.
+TEST(InertialBlockSegmentsTest, CompressesOneKilohertzNotTheDemoRate) {
+  const int at_1k = InertialBlockSegments(29.0, 6, 4, 40, 39);
+  EXPECT_GE(at_1k, 4);
+  EXPECT_LE(at_1k, 16);
+  EXPECT_EQ(InertialBlockSegments(7.25, 6, 4, 40, 39), 0);
+  EXPECT_EQ(InertialBlockSegments(5.8, 3, 4, 12, 11), 0);  // the 200 Hz gyro
+}
+
+}  // namespace
+}  // namespace ctcal
