@@ -10,6 +10,7 @@
 
 #include "ctcal/calibrator/discrete/preintegration.h"
 #include "ctcal/calibrator/discrete/preintegration_residual.h"
+#include "ctcal/sensors/inertial_noise.h"
 #include "ctcal/sim/scenario.h"
 #include "ctcal/spline/so3_manifold.h"
 
@@ -31,16 +32,6 @@ ImuIntrinsics TestIntrinsics() {
   intr.SetT_g(T_g);
   intr.SetRotation(ExpSO3<double>(Eigen::Vector3d(0.01, -0.02, 0.015)).toRotationMatrix());
   return intr;
-}
-
-InertialNoise TestNoise() {
-  InertialNoise n;
-  n.gyroscope_noise_density = 1.7e-4;
-  n.gyroscope_random_walk = 2e-5;
-  n.accelerometer_noise_density = 2e-3;
-  n.accelerometer_random_walk = 3e-3;
-  n.update_rate = kRate;
-  return n;
 }
 
 struct Truth {
@@ -90,7 +81,7 @@ class DiscretePreintegration : public ::testing::Test {
 
   std::unique_ptr<sim::Trajectory> traj_;
   ImuIntrinsics intr_ = TestIntrinsics();
-  InertialNoise noise_ = TestNoise();
+  InertialNoise noise_ = EurocAdis16448Noise(kRate);
   Eigen::Vector3d b_g_ = Eigen::Vector3d(0.004, -0.003, 0.002);
   Eigen::Vector3d b_a_ = Eigen::Vector3d(0.05, -0.03, 0.04);
   std::vector<RawImuSample> clean_;
