@@ -185,6 +185,28 @@ class DiscreteResiduals : public ::testing::Test {
             q_B_S_.data()};
   }
 
+  // The auxiliary IMU's factor between the two keyframes (A.1 sources), its blocks in *list;
+  // rigid: appendix B, without the auxiliary velocities.
+  AuxImuFunctor AuxImuBetweenKeyframes(bool rigid, BlockList* list) {
+    const BaseSource src_i = BaseSource::Add(list, &k0_, nullptr, &base_, g_W_.data());
+    const BaseSource src_j = BaseSource::Add(list, &k1_, nullptr, &base_, g_W_.data());
+    AuxImuIndex ix;
+    ix.intr = ImuBlockIndex::Add(list, &aux_imu_);
+    ix.q_B_A = list->Add(q_B_S_.data(), 4);
+    ix.t_B_A = list->Add(t_B_S_.data(), 3);
+    ix.time_offset = list->Add(&time_offset_, 1);
+    if (!rigid) {
+      ix.v_i = list->Add(v_i_.data(), 3);
+      ix.v_j = list->Add(v_j_.data(), 3);
+    }
+    ix.bg = list->Add(bg_.data(), 3);
+    ix.ba = list->Add(ba_.data(), 3);
+    auto pre = std::make_shared<Preintegration>(
+        aux_samples_, k0_.t - time_offset_, k1_.t - time_offset_, aux_imu_, noise_,
+        Eigen::Vector3d(bg_.data()), Eigen::Vector3d(ba_.data()));
+    return AuxImuFunctor{pre, src_i, src_j, ix};
+  }
+
   Keyframe k0_, k1_;
   ImuIntrinsics base_{ImuModel::kImu2, GSensitivity::kFull};
   ImuIntrinsics aux_imu_{ImuModel::kImu1, GSensitivity::kUpper};
@@ -232,24 +254,9 @@ TEST_F(DiscreteResiduals, CornerJacobiansMatchNumericA1AndA2) {
 TEST_F(DiscreteResiduals, AuxImuJacobiansMatchNumericStateAndRigid) {
   for (const bool rigid : {false, true}) {
     BlockList list;
-    const BaseSource src_i = BaseSource::Add(&list, &k0_, nullptr, &base_, g_W_.data());
-    const BaseSource src_j = BaseSource::Add(&list, &k1_, nullptr, &base_, g_W_.data());
-    AuxImuIndex ix;
-    ix.intr = ImuBlockIndex::Add(&list, &aux_imu_);
-    ix.q_B_A = list.Add(q_B_S_.data(), 4);
-    ix.t_B_A = list.Add(t_B_S_.data(), 3);
-    ix.time_offset = list.Add(&time_offset_, 1);
-    if (!rigid) {
-      ix.v_i = list.Add(v_i_.data(), 3);
-      ix.v_j = list.Add(v_j_.data(), 3);
-    }
-    ix.bg = list.Add(bg_.data(), 3);
-    ix.ba = list.Add(ba_.data(), 3);
-    auto pre = std::make_shared<Preintegration>(
-        aux_samples_, k0_.t - time_offset_, k1_.t - time_offset_, aux_imu_, noise_,
-        Eigen::Vector3d(bg_.data()), Eigen::Vector3d(ba_.data()));
+    const AuxImuFunctor f = AuxImuBetweenKeyframes(rigid, &list);
     std::unique_ptr<ceres::CostFunction> cost(
-        MakeDynamicAutoDiff(new AuxImuFunctor{pre, src_i, src_j, ix}, list.sizes(), 9));
+        MakeDynamicAutoDiff(new AuxImuFunctor(f), list.sizes(), 9));
     SCOPED_TRACE(rigid ? "rigid" : "state");
     ExpectJacobiansMatchNumeric(*cost, list, Quaternions());
   }
@@ -276,23 +283,7 @@ TEST_F(DiscreteResiduals, AuxGyroJacobiansMatchNumeric) {
 TEST_F(DiscreteResiduals, SplitIntegrationMatchesOnePassJacobians) {
   for (const bool rigid : {false, true}) {
     BlockList list;
-    const BaseSource src_i = BaseSource::Add(&list, &k0_, nullptr, &base_, g_W_.data());
-    const BaseSource src_j = BaseSource::Add(&list, &k1_, nullptr, &base_, g_W_.data());
-    AuxImuIndex ix;
-    ix.intr = ImuBlockIndex::Add(&list, &aux_imu_);
-    ix.q_B_A = list.Add(q_B_S_.data(), 4);
-    ix.t_B_A = list.Add(t_B_S_.data(), 3);
-    ix.time_offset = list.Add(&time_offset_, 1);
-    if (!rigid) {
-      ix.v_i = list.Add(v_i_.data(), 3);
-      ix.v_j = list.Add(v_j_.data(), 3);
-    }
-    ix.bg = list.Add(bg_.data(), 3);
-    ix.ba = list.Add(ba_.data(), 3);
-    auto pre = std::make_shared<Preintegration>(
-        aux_samples_, k0_.t - time_offset_, k1_.t - time_offset_, aux_imu_, noise_,
-        Eigen::Vector3d(bg_.data()), Eigen::Vector3d(ba_.data()));
-    const AuxImuFunctor f{pre, src_i, src_j, ix};
+    const AuxImuFunctor f = AuxImuBetweenKeyframes(rigid, &list);
     std::unique_ptr<ceres::CostFunction> ref(
         MakeDynamicAutoDiff(new AuxImuFunctor(f), list.sizes(), 9));
     std::unique_ptr<ceres::CostFunction> split(MakeSplitIntegration(f, list, 9));
