@@ -22,12 +22,13 @@ int RunReport(int argc, char** argv) {
   std::string out_dir, png_dir;
   cli.options().add_options()("out", po::value(&out_dir)->required(),
                               "calibration folder holding result.yaml and report_data/")(
-      "png-dir", po::value(&png_dir), "also write every figure as <png-dir>/<figure id>.png");
+      "png-dir", po::value(&png_dir),
+      "also write every figure as <png-dir>/<figure id>.png (<png-dir>/<method>/<figure id>.png "
+      "for a --method both folder)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   report::ReportOptions options;
   options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
-  options.png_dir = png_dir;
   // `--method both` keeps no result at the top, one full result per method below it (issue 8).
   std::vector<std::string> folders;
   if (!std::filesystem::exists(out_dir + "/result.yaml")) {
@@ -39,6 +40,12 @@ int RunReport(int argc, char** argv) {
   if (folders.empty())
     folders.push_back(out_dir);
   for (const std::string& folder : folders) {
+    // Both methods' figures have the same ids: each method's go below its own name, as its
+    // report does below OUT, or the second would overwrite the first.
+    options.png_dir =
+        png_dir.empty() || folder == out_dir
+            ? png_dir
+            : (std::filesystem::path(png_dir) / std::filesystem::path(folder).filename()).string();
     report::ReportOutput out;
     try {
       out = report::RenderReport(folder, options);

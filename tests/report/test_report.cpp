@@ -365,5 +365,38 @@ TEST_F(ReportTest, CommandLineRendersBothMethodsOfABothFolder) {
   EXPECT_FALSE(fs::exists(dir_ + "/report.html"));
 }
 
+// Both methods' figures have the same ids: `--png-dir DIR` of a both folder writes each method's
+// below DIR/<method>/ (as the reports are below OUT/<method>/), none over the other's.
+TEST_F(ReportTest, PngDirOfABothFolderKeepsEachMethodsFigures) {
+  const std::string bin = CTCAL_BINARY;
+  if (!fs::exists(bin))
+    GTEST_SKIP() << "ctcal not built at " << bin;
+  test::MakeSyntheticOut(dir_ + "/spline");
+  test::MakeSyntheticOut(dir_ + "/discrete");
+  // The discrete trajectory differs, so that its figure must differ from the spline's.
+  std::vector<PoseSample> traj = ReadTrajectory(TrajectoryPath(dir_ + "/discrete"));
+  for (PoseSample& p : traj)
+    p.p_W_B.z() += 0.5 * p.p_W_B.x();
+  WriteTrajectory(dir_ + "/discrete", traj);
+  const std::string png = dir_ + "/png";
+  ASSERT_EQ(
+      std::system((bin + " report --out " + dir_ + " --png-dir " + png + " >/dev/null").c_str()),
+      0);
+  std::set<std::string> spline_ids, discrete_ids;
+  for (const auto& [method, ids] :
+       {std::pair<std::string, std::set<std::string>*>{"spline", &spline_ids},
+        {"discrete", &discrete_ids}}) {
+    ASSERT_TRUE(fs::is_directory(png + "/" + method)) << method;
+    for (const auto& e : fs::directory_iterator(png + "/" + method))
+      ids->insert(e.path().filename().string());
+  }
+  EXPECT_GT(spline_ids.size(), 10u);
+  EXPECT_EQ(spline_ids, discrete_ids);
+  EXPECT_TRUE(spline_ids.count("fig-trajectory.png"));
+  for (const auto& e : fs::directory_iterator(png))
+    EXPECT_TRUE(e.is_directory()) << e.path() << " at the top of --png-dir";
+  EXPECT_NE(Slurp(png + "/spline/fig-trajectory.png"), Slurp(png + "/discrete/fig-trajectory.png"));
+}
+
 }  // namespace
 }  // namespace ctcal::report
