@@ -3,7 +3,7 @@
 set -uo pipefail
 root=${1:-$(dirname "$0")/..}
 cd "$root" || exit 2
-files=$(find spline sensors targets calibrator apps sim bench tests \
+files=$(find spline sensors targets calibrator report apps sim bench tests \
   \( -name '*.h' -o -name '*.hpp' -o -name '*.cpp' -o -name '*.cc' \) -not -path '*/data/*' 2>/dev/null | sort)
 bad=0
 for f in $files; do

@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential make cmake pkg-config git
   libeigen3-dev libceres-dev libsuitesparse-dev
   libopencv-dev libopencv-contrib-dev
   libapriltag-dev
@@ -12,10 +12,16 @@ PACKAGES=(
   libmrcal-dev mrcal
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcairo2-dev libpng-dev zlib1g-dev
+  fonts-dejavu-core
   clang-format
   poppler-utils opencv-doc visp-images-data
   chromium python3
 )
+# Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
+# fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot.cpp);
+# poppler-utils (pdftoppm, pdftotext), chromium and python3 (scripts/spec_sim.py, standard
+# library only) are called by tests; opencv-doc and visp-images-data hold real board photos the
+# detector tests read.
 
 missing=()
 for p in "${PACKAGES[@]}"; do
