@@ -20,6 +20,7 @@
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -226,6 +227,19 @@ int RunCalibrate(int argc, char** argv) {
     rig = LoadRig(rig_path, &warnings);
     for (const std::string& w : warnings)
       log("warning: " + w);
+    // The camera models' own domain (a positive focal length, omni's xi, ...), which the rig
+    // reader leaves to them (it reads results of any value back exactly): bad input, before the
+    // calibration builds the cameras.
+    for (const SensorConfig& s : rig.sensors) {
+      if (s.type != SensorType::kCamera)
+        continue;
+      try {
+        CameraModel::Create(s.camera_model, s.intrinsics, s.distortion_model, s.distortion_coeffs,
+                            Eigen::Vector2i(s.width, s.height));
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(rig_path + ": sensors." + s.name + ".intrinsics: " + e.what());
+      }
+    }
     warnings.clear();
     data = LoadDataset(data_dir, rig, &warnings);
     for (const std::string& w : warnings)

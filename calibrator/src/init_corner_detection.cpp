@@ -57,8 +57,9 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
 }
 
 std::vector<CornerObservation> DetectCameraCorners(
-    const std::string& camera, const Detector& detector, const std::string& image_dir,
+    const SensorConfig& sensor, const Detector& detector, const std::string& image_dir,
     const std::vector<ImageEntry>& images, CameraDetectionSummary* summary, const InitLog& log) {
+  const std::string& camera = sensor.name;
   CameraDetectionSummary s;
   s.camera = camera;
   s.images = images.size();
@@ -84,6 +85,16 @@ std::vector<CornerObservation> DetectCameraCorners(
         }
       });
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // An image of another size is another camera's (or the rig's resolution is wrong): its corners
+  // would be fitted with this camera's intrinsics.
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const DetectionResult& r = results[i];
+    if (r.image_width != 0 && (r.image_width != sensor.width || r.image_height != sensor.height))
+      throw InitError(kStage, camera,
+                      paths[i] + " is " + std::to_string(r.image_width) + "x" +
+                          std::to_string(r.image_height) + " pixels, the rig's resolution is " +
+                          std::to_string(sensor.width) + "x" + std::to_string(sensor.height));
+  }
 
   const std::vector<CornerObservation> corners = CornersFromDetections(images, results, &s);
   if (s.unreadable == s.images)
@@ -131,7 +142,7 @@ std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
         detector = std::make_unique<Detector>(Board(rig.target), options);
       }
       CameraDetectionSummary summary;
-      d.corners = DetectCameraCorners(sensor.name, *detector,
+      d.corners = DetectCameraCorners(sensor, *detector,
                                       (fs::path(data_dir) / sensor.name / "data").string(),
                                       d.images, &summary, log);
       summaries.push_back(std::move(summary));

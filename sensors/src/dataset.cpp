@@ -26,6 +26,9 @@ const char* const kGroundTruthHeader =
 const char* const kGyroBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z";
 const char* const kImuBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z,ba_x,ba_y,ba_z";
 
+constexpr double kMaxRate = 1e3;           // rad/s
+constexpr double kMaxSpecificForce = 1e4;  // m/s^2
+
 std::string Trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t");
   if (b == std::string::npos)
@@ -139,6 +142,20 @@ class CsvFile {
                            Number(f[first + 2], what));
   }
 
+  // A reading: finite, and within `range` on every axis when one is given (InertialRange).
+  Eigen::Vector3d Reading(const std::vector<std::string>& f, int first, const char* what,
+                          const double* range, const char* unit) const {
+    const Eigen::Vector3d v = Vector3(f, first, what);
+    for (int k = 0; range && k < 3; ++k) {
+      if (std::abs(v[k]) > *range) {
+        Fail(std::string(what) + " " + f[first + k] + " " + unit + " is beyond any IMU's range (" +
+             FormatDouble(*range) + " " + unit +
+             " per axis): a corrupt sample, or not in the SPEC's units");
+      }
+    }
+    return v;
+  }
+
   // Strictly increasing stamps.
   void CheckIncreasing(std::int64_t t, bool first, std::int64_t previous) const {
     if (first)
@@ -240,7 +257,8 @@ int TargetCornerCount(const TargetConfig& target) {
   return target.target_rows * target.target_cols;
 }
 
-std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings) {
+std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings,
+                                  const InertialRange* range) {
   CsvFile csv(path);
   std::vector<ImuSample> out;
   std::vector<std::int64_t> stamps;
@@ -251,8 +269,9 @@ std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings) {
     ImuSample s;
     s.t_ns = csv.Stamp(f[0]);
     csv.CheckIncreasing(s.t_ns, out.empty(), out.empty() ? 0 : out.back().t_ns);
-    s.w_m = csv.Vector3(f, 1, "angular rate");
-    s.a_m = csv.Vector3(f, 4, "specific force");
+    s.w_m = csv.Reading(f, 1, "angular rate", range ? &range->max_rate : nullptr, "rad/s");
+    s.a_m =
+        csv.Reading(f, 4, "specific force", range ? &range->max_specific_force : nullptr, "m/s^2");
     out.push_back(s);
     stamps.push_back(s.t_ns);
   }
@@ -263,7 +282,8 @@ std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings) {
   return out;
 }
 
-std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings) {
+std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings,
+                                    const InertialRange* range) {
   CsvFile csv(path);
   std::vector<GyroSample> out;
   std::vector<std::int64_t> stamps;
@@ -274,7 +294,7 @@ std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings)
     GyroSample s;
     s.t_ns = csv.Stamp(f[0]);
     csv.CheckIncreasing(s.t_ns, out.empty(), out.empty() ? 0 : out.back().t_ns);
-    s.w_m = csv.Vector3(f, 1, "angular rate");
+    s.w_m = csv.Reading(f, 1, "angular rate", range ? &range->max_rate : nullptr, "rad/s");
     out.push_back(s);
     stamps.push_back(s.t_ns);
   }
@@ -324,7 +344,8 @@ std::vector<ImageEntry> ReadImageCsv(const std::string& path, bool check_images,
 }
 
 std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_corners,
-                                              const std::set<std::int64_t>* frame_stamps) {
+                                              const std::set<std::int64_t>* frame_stamps,
+                                              const CornerImage* image) {
   CsvFile csv(path);
   std::vector<CornerObservation> out;
   std::vector<std::string> f;
@@ -369,6 +390,16 @@ std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_c
       c.sigma = csv.Number(f[4], "sigma");
       if (!(*c.sigma > 0.0))
         csv.Fail("sigma must be > 0 px, got " + f[4]);
+    }
+    if (image) {
+      const double margin = 0.5 + 5.0 * c.sigma.value_or(image->pixel_sigma);
+      if (!(c.u >= -margin && c.u <= image->width - 1 + margin && c.v >= -margin &&
+            c.v <= image->height - 1 + margin)) {
+        csv.Fail("corner (" + f[2] + ", " + f[3] + ") is outside the camera's " +
+                 std::to_string(image->width) + "x" + std::to_string(image->height) +
+                 " image (by more than 5 sigma): another camera's corners, or the wrong "
+                 "resolution?");
+      }
     }
     out.push_back(c);
   }
@@ -524,6 +555,7 @@ std::map<std::string, SensorData> LoadDataset(const std::string& data_dir, const
   if (!fs::is_directory(data_dir))
     throw std::runtime_error(data_dir + ": no such dataset folder");
   std::map<std::string, SensorData> out;
+  const InertialRange range;
   for (const SensorConfig& s : rig.sensors) {
     const fs::path dir = fs::path(data_dir) / s.name;
     if (!fs::is_directory(dir)) {
@@ -534,10 +566,10 @@ std::map<std::string, SensorData> LoadDataset(const std::string& data_dir, const
     const std::string data_csv = (dir / "data.csv").string();
     switch (s.type) {
       case SensorType::kImu:
-        d.imu = ReadImuCsv(data_csv, warnings);
+        d.imu = ReadImuCsv(data_csv, warnings, &range);
         break;
       case SensorType::kGyro:
-        d.gyro = ReadGyroCsv(data_csv, warnings);
+        d.gyro = ReadGyroCsv(data_csv, warnings, &range);
         break;
       case SensorType::kCamera: {
         const std::string corners_csv = (dir / "corners.csv").string();
@@ -553,8 +585,9 @@ std::map<std::string, SensorData> LoadDataset(const std::string& data_dir, const
           std::set<std::int64_t> stamps;
           for (const ImageEntry& e : d.images)
             stamps.insert(e.t_ns);
+          const CornerImage image{s.width, s.height, s.pixel_sigma};
           d.corners = ReadCornersCsv(corners_csv, TargetCornerCount(rig.target),
-                                     has_list ? &stamps : nullptr);
+                                     has_list ? &stamps : nullptr, &image);
         }
         break;
       }

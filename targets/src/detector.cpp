@@ -1407,6 +1407,8 @@ std::vector<DetectionResult> Detector::DetectFiles(
         results[i].error = "cannot read image " + paths[i];
       } else {
         results[i] = Detect(image);
+        results[i].image_width = image.cols;
+        results[i].image_height = image.rows;
         if (!results[i].error.empty())
           results[i].error = paths[i] + ": " + results[i].error;
       }

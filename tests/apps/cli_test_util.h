@@ -28,11 +28,15 @@ inline std::string Slurp(const std::string& path) {
 }
 
 // Runs `ctcal <args>` through the shell; stdout and stderr go to stdout.txt and stderr.txt in
-// `dir` (created), which should be unique per test: ctest runs tests in parallel.
-inline CliRun RunCtcal(const std::string& args, const std::string& dir) {
+// `dir` (created), which should be unique per test: ctest runs tests in parallel. With
+// `timeout_s` > 0 the run is killed after that many seconds (coreutils' timeout): the code is then
+// 124, and 128 + N when ctcal died of signal N.
+inline CliRun RunCtcal(const std::string& args, const std::string& dir, int timeout_s = 0) {
   std::filesystem::create_directories(dir);
   const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
-  const std::string cmd = std::string(CTCAL_BINARY) + " " + args + " >" + out + " 2>" + err;
+  const std::string cmd =
+      (timeout_s > 0 ? "timeout -k 5 " + std::to_string(timeout_s) + " " : std::string()) +
+      std::string(CTCAL_BINARY) + " " + args + " >" + out + " 2>" + err;
   const int status = std::system(cmd.c_str());
   CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -143,6 +143,16 @@ const std::vector<BadFile>& Corpus() {
       {"imu_empty_line.csv", Reader::kImu, {"imu_empty_line.csv:3:", "empty line"}},
       {"imu_no_samples.csv", Reader::kImu, {"imu_no_samples.csv:", "no samples"}},
       {"gyro_inf.csv", Reader::kGyro, {"gyro_inf.csv:3:", "angular rate is -inf"}},
+      {"gyro_out_of_range.csv",
+       Reader::kGyro,
+       {"gyro_out_of_range.csv:3:", "angular rate -5000 rad/s is beyond any IMU's range"}},
+      {"imu_out_of_range.csv",
+       Reader::kImu,
+       {"imu_out_of_range.csv:3:", "specific force 9.81e6 m/s^2 is beyond any IMU's range"}},
+      {"corners_outside_image.csv",
+       Reader::kCorners,
+       {"corners_outside_image.csv:3:",
+        "corner (10.5, 520.5) is outside the camera's 752x480 image"}},
       {"corners_id_outside.csv",
        Reader::kCorners,
        {"corners_id_outside.csv:3:", "corner_id 144 is outside the target (ids 0..143)"}},
@@ -181,6 +191,7 @@ const std::vector<BadFile>& Corpus() {
 
 void Read(Reader reader, const std::string& path) {
   Warnings warnings;
+  const InertialRange range;
   switch (reader) {
     case Reader::kRig:
       LoadRig(path, &warnings);
@@ -188,18 +199,20 @@ void Read(Reader reader, const std::string& path) {
     case Reader::kTarget:
       LoadTargetConfig(path);
       break;
-    case Reader::kImu:
-      ReadImuCsv(path, &warnings);
+    case Reader::kImu:  // with LoadDataset's range check
+      ReadImuCsv(path, &warnings, &range);
       break;
     case Reader::kGyro:
-      ReadGyroCsv(path, &warnings);
+      ReadGyroCsv(path, &warnings, &range);
       break;
     case Reader::kImages:
       ReadImageCsv(path, false, &warnings);
       break;
-    case Reader::kCorners:
-      ReadCornersCsv(path, 144);  // a 6x6 aprilgrid
+    case Reader::kCorners: {
+      const CornerImage image{752, 480, 1.0};      // LoadDataset's check of a 752x480 camera
+      ReadCornersCsv(path, 144, nullptr, &image);  // a 6x6 aprilgrid
       break;
+    }
     case Reader::kGroundTruth:
       ReadGroundTruthCsv(path);
       break;

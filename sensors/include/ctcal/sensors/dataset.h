@@ -8,11 +8,12 @@
 //   DATA/<inertial>/biases.csv #timestamp [ns],bw_x,bw_y,bw_z[,ba_x,ba_y,ba_z]
 //
 // Readers are strict and never skip a line: a bad header, column count, number, NaN/Inf,
-// a timestamp that does not increase, a corner id outside the target, a missing image file, a
-// corner frame absent from data.csv: each throws std::runtime_error "<file>:<line>: <what>".
-// Gaps (intervals longer than 1.5x the median) are warnings with their count. A first line
-// starting with '#' is the header; without one, the first line is data.
-// Writers produce what the readers read back exactly: int64 nanoseconds, shortest exact doubles.
+// a timestamp that does not increase, a
+// corner id outside the target, a missing image file, a corner frame absent from data.csv: each
+// throws std::runtime_error "<file>:<line>: <what>". Gaps (intervals longer than 1.5x the median)
+// are warnings with their count. A first line starting with '#' is the header; without one, the
+// first line is data. Writers produce what the readers read back exactly: int64 nanoseconds,
+// shortest exact doubles.
 #pragma once
 
 #include <Eigen/Core>
@@ -73,16 +74,39 @@ struct BiasSample {
 // Warnings (gaps) go to *warnings, or to stderr when it is null.
 using Warnings = std::vector<std::string>;
 
-std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings = nullptr);
-std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings = nullptr);
+// What a real IMU can read: they saturate at a few thousand deg/s and a few hundred g, so a
+// reading ten times beyond on an axis is a corrupt sample or other units, and would pull the solve
+// away (one 1e6 m/s^2 sample made it diverge, blaming a camera). LoadDataset checks every reading
+// against it; the readers alone, given none, read any finite number (exact round trips).
+struct InertialRange {
+  double max_rate = 1e3;            // rad/s
+  double max_specific_force = 1e4;  // m/s^2
+};
+
+std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings = nullptr,
+                                  const InertialRange* range = nullptr);
+std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings = nullptr,
+                                    const InertialRange* range = nullptr);
 // With `check_images`, every DATA/<cam>/data/<filename> must exist (the folder of `path` + data/).
 std::vector<ImageEntry> ReadImageCsv(const std::string& path, bool check_images,
                                      Warnings* warnings = nullptr);
+// The image a camera's corners are measured in (ReadCornersCsv): a detector reports no corner off
+// the pixel grid [-0.5, width - 0.5] x [-0.5, height - 0.5], and noise moves one a few sigma at
+// most, so a corner more than 5 sigma (its row's, else `pixel_sigma`) beyond it is not a
+// measurement of this camera (another resolution, another camera's file, u and v swapped).
+struct CornerImage {
+  int width = 0;
+  int height = 0;
+  double pixel_sigma = 1.0;
+};
+
 // `num_corners`: the target's corner count (ids are 0 .. num_corners-1). `frame_stamps`: when
-// given (the camera has a data.csv), every corner's stamp must be one of them. Rows of a frame
-// are contiguous, frames in increasing time, a corner id at most once per frame.
+// given (the camera has a data.csv), every corner's stamp must be one of them. `image`: when
+// given, every corner must lie in it (CornerImage). Rows of a frame are contiguous, frames in
+// increasing time, a corner id at most once per frame.
 std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_corners,
-                                              const std::set<std::int64_t>* frame_stamps = nullptr);
+                                              const std::set<std::int64_t>* frame_stamps = nullptr,
+                                              const CornerImage* image = nullptr);
 std::vector<GroundTruthState> ReadGroundTruthCsv(const std::string& path);
 // `with_accel`: the file has the 3 accelerometer-bias columns (an imu's; a gyro's has not).
 std::vector<BiasSample> ReadBiasesCsv(const std::string& path, bool with_accel);

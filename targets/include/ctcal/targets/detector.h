@@ -95,7 +95,9 @@ struct DetectionResult {
   int tags_detected = 0;  // tags (AprilGrid) or markers (ChArUco) decoded before the rules
   int tags_accepted = 0;
   std::vector<TagRejection> rejected;
-  std::string error;  // set when the image could not be used at all (unreadable, empty)
+  std::string error;    // set when the image could not be used at all (unreadable, empty)
+  int image_width = 0;  // of the image read by DetectFiles (0: not read)
+  int image_height = 0;
   // The corners' scatter about a smooth grid (EstimateGridScatter; 0 when too few corners to
   // tell) and the model error taken from it, which every corner's sigma includes (px).
   double grid_scatter_px = 0.0;

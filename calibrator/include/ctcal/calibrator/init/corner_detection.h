@@ -43,9 +43,10 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
 // `images`, the camera's data.csv) and returns the corners in SPEC section 6 rows: the image's
 // stamp, the corner id, the pixel and the detector's sigma. Logs progress per tenth of the
 // images and the summary line. Throws InitError (stage "corner detection", the camera) when
-// data.csv lists no image, when no image can be read, or when no image shows the board (with a
-// hint from the rejections: a larger board or another border width than the target file says).
-std::vector<CornerObservation> DetectCameraCorners(const std::string& camera,
+// data.csv lists no image, when no image can be read, when an image's size is not the camera's
+// resolution, or when no image shows the board (with a hint from the rejections: a larger board
+// or another border width than the target file says).
+std::vector<CornerObservation> DetectCameraCorners(const SensorConfig& camera,
                                                    const Detector& detector,
                                                    const std::string& image_dir,
                                                    const std::vector<ImageEntry>& images,
