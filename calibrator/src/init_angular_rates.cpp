@@ -1,4 +1,5 @@
 #include "ctcal/calibrator/init/angular_rates.h"
+#include "ctcal/calibrator/init/init_log.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,14 +7,6 @@
 #include "ctcal/spline/so3.h"
 
 namespace ctcal {
-
-namespace {
-
-double Seconds(std::int64_t t_ns) {
-  return static_cast<double>(t_ns) * 1e-9;
-}
-
-}  // namespace
 
 std::vector<RateSample> RatesFromImu(const std::vector<ImuSample>& samples) {
   std::vector<RateSample> rates;
@@ -72,7 +65,7 @@ BaseRateIntegral::BaseRateIntegral(const std::vector<RateSample>& base) {
   w_.reserve(base.size());
   q_.reserve(base.size());
   for (const RateSample& r : base) {
-    const double t = Seconds(r.t_ns);
+    const double t = InitSeconds(r.t_ns);
     q_.push_back(q_.empty() ? Eigen::Quaterniond::Identity()
                             : (q_.back() * ExpSO3<double>(Eigen::Vector3d(
                                                0.5 * (w_.back() + r.w_S) * (t - t_.back()))))

@@ -15,17 +15,6 @@ namespace ctcal {
 
 namespace {
 
-double Seconds(std::int64_t t_ns) {
-  return static_cast<double>(t_ns) * 1e-9;
-}
-
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), fmt, args...);
-  return buffer;
-}
-
 double Median(std::vector<double> v) {
   if (v.empty())
     return 0.0;
@@ -251,8 +240,8 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   if (static_cast<int>(frames.size()) < options.min_views)
     throw InitError(
         kStage, camera_name,
-        Format("%d frames with >= %d corners (need %d board views)",
-               static_cast<int>(frames.size()), options.min_corners, options.min_views));
+        FormatInitLine("%d frames with >= %d corners (need %d board views)",
+                       static_cast<int>(frames.size()), options.min_corners, options.min_views));
   if (static_cast<int>(frames.size()) > options.max_views) {
     std::vector<std::vector<CornerObservation>> thinned;
     for (int i = 0; i < options.max_views; ++i)
@@ -285,8 +274,8 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   CameraModel camera = guess;
   std::string factor_note;
   if (zhang != 1.0 && !(zhang < options.max_focal_ratio && zhang > 1.0 / options.max_focal_ratio)) {
-    factor_note =
-        Format(", x%.4f rejected: beyond the guess's x%.2f", zhang, options.max_focal_ratio);
+    factor_note = FormatInitLine(", x%.4f rejected: beyond the guess's x%.2f", zhang,
+                                 options.max_focal_ratio);
   } else if (zhang != 1.0) {
     CameraModel scaled = guess;
     scaled.SetParams(params);
@@ -297,17 +286,17 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
       pnp = std::move(scaled_pnp);
       result.focal_scale = zhang;
     } else {
-      factor_note = Format(", x%.4f rejected: PnP RMS %.2f px vs the guess's %.2f px", zhang,
-                           scaled_rms, result.rms_px_guess);
+      factor_note = FormatInitLine(", x%.4f rejected: PnP RMS %.2f px vs the guess's %.2f px",
+                                   zhang, scaled_rms, result.rms_px_guess);
     }
   }
 
   // b. Poses by robust PnP with the (rescaled) model.
   if (static_cast<int>(pnp.size()) < options.min_views)
-    throw InitError(
-        kStage, camera_name,
-        Format("PnP found the board in %d of %d frames (need %d)", static_cast<int>(pnp.size()),
-               static_cast<int>(frames.size()), options.min_views));
+    throw InitError(kStage, camera_name,
+                    FormatInitLine("PnP found the board in %d of %d frames (need %d)",
+                                   static_cast<int>(pnp.size()), static_cast<int>(frames.size()),
+                                   options.min_views));
   std::map<std::int64_t, int> view_of_stamp;
   std::vector<ViewState> views;
   for (const BoardView& v : pnp) {
@@ -352,12 +341,13 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
     const double ratio =
         camera.params()[static_cast<long>(i)] / guess.params()[static_cast<long>(i)];
     if (!(ratio > 1.0 / options.max_focal_ratio && ratio < options.max_focal_ratio))
-      throw InitError(kStage, camera_name,
-                      Format("the board views do not determine the focal length: the refinement "
-                             "moved %s from %.1f to %.4g px (views nearly fronto-parallel or "
-                             "alike: tilt the board relative to the camera)",
-                             names[i].c_str(), guess.params()[static_cast<long>(i)],
-                             camera.params()[static_cast<long>(i)]));
+      throw InitError(
+          kStage, camera_name,
+          FormatInitLine("the board views do not determine the focal length: the refinement "
+                         "moved %s from %.1f to %.4g px (views nearly fronto-parallel or "
+                         "alike: tilt the board relative to the camera)",
+                         names[i].c_str(), guess.params()[static_cast<long>(i)],
+                         camera.params()[static_cast<long>(i)]));
   }
   result.rms_px = Rms(ReprojectionErrors(camera, views, refs), &keep);
   result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
@@ -365,10 +355,10 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   result.camera = camera;
   std::string values;
   for (int i = 0; i < camera.NumParams(); ++i)
-    values += (i ? " " : "") +
-              Format("%s=%.4g", names[static_cast<std::size_t>(i)].c_str(), camera.params()[i]);
+    values += (i ? " " : "") + FormatInitLine("%s=%.4g", names[static_cast<std::size_t>(i)].c_str(),
+                                              camera.params()[i]);
   result.summary = camera_name +
-                   Format(
+                   FormatInitLine(
                        ": focal x%.4f (Zhang, %d views%s), then refined on %d views / %d "
                        "corners (%d outliers): RMS %.3f px (guess %.2f px); ",
                        result.focal_scale, zhang_views, factor_note.c_str(), result.views,
@@ -393,16 +383,18 @@ BoardPosesResult InitBoardPoses(const std::string& camera_name, const CameraMode
   if (static_cast<int>(result.views.size()) < min_views)
     throw InitError(
         kStage, camera_name,
-        Format("board pose found in %d of %d frames with corners (need %d; frames "
-               "need >= %d corners the camera model can unproject)",
-               static_cast<int>(result.views.size()), result.frames, min_views, min_corners));
+        FormatInitLine("board pose found in %d of %d frames with corners (need %d; frames "
+                       "need >= %d corners the camera model can unproject)",
+                       static_cast<int>(result.views.size()), result.frames, min_views,
+                       min_corners));
   std::vector<double> rms;
   for (const BoardView& v : result.views)
     rms.push_back(v.rms_ray_error);
   result.median_rms_ray = Median(rms);
-  result.summary = camera_name + Format(": board pose in %d of %d frames, median ray RMS %.2e",
-                                        static_cast<int>(result.views.size()), result.frames,
-                                        result.median_rms_ray);
+  result.summary =
+      camera_name + FormatInitLine(": board pose in %d of %d frames, median ray RMS %.2e",
+                                   static_cast<int>(result.views.size()), result.frames,
+                                   result.median_rms_ray);
   if (log)
     log(result.summary);
   return result;
@@ -417,22 +409,22 @@ RelativePoseResult InitCameraRelativePose(const std::string& camera_i,
   const std::string pair_name = camera_i + "-" + camera_j;
   std::vector<double> gaps;
   for (std::size_t k = 1; k < views_j.size(); ++k)
-    gaps.push_back(Seconds(views_j[k].t_ns) - Seconds(views_j[k - 1].t_ns));
+    gaps.push_back(InitSeconds(views_j[k].t_ns) - InitSeconds(views_j[k - 1].t_ns));
   const double max_gap = 1.5 * Median(gaps);
   // Samples T_Ci_Cj = T_Ci_W (T_Cj_W at the same base time)^-1.
   std::vector<Eigen::Quaterniond> q;
   std::vector<Eigen::Vector3d> t;
   for (const BoardView& vi : views_i) {
     // Cj's own clock at the base time of this Ci view.
-    const double t_j = Seconds(vi.t_ns) + time_offset_i - time_offset_j;
-    const auto it =
-        std::upper_bound(views_j.begin(), views_j.end(), t_j,
-                         [](double value, const BoardView& v) { return value < Seconds(v.t_ns); });
+    const double t_j = InitSeconds(vi.t_ns) + time_offset_i - time_offset_j;
+    const auto it = std::upper_bound(
+        views_j.begin(), views_j.end(), t_j,
+        [](double value, const BoardView& v) { return value < InitSeconds(v.t_ns); });
     if (it == views_j.begin() || it == views_j.end())
       continue;
     const BoardView& b = *it;
     const BoardView& a = *(it - 1);
-    const double ta = Seconds(a.t_ns), tb = Seconds(b.t_ns);
+    const double ta = InitSeconds(a.t_ns), tb = InitSeconds(b.t_ns);
     if (tb - ta > max_gap)
       continue;
     const double s = (t_j - ta) / (tb - ta);
@@ -446,10 +438,11 @@ RelativePoseResult InitCameraRelativePose(const std::string& camera_i,
   }
   const int n = static_cast<int>(q.size());
   if (n < 3)
-    throw InitError(kStage, pair_name,
-                    Format("%d views of '%s' have a view of '%s' within %.1f ms on each side "
-                           "(need 3)",
-                           n, camera_i.c_str(), camera_j.c_str(), max_gap * 1e3));
+    throw InitError(
+        kStage, pair_name,
+        FormatInitLine("%d views of '%s' have a view of '%s' within %.1f ms on each side "
+                       "(need 3)",
+                       n, camera_i.c_str(), camera_j.c_str(), max_gap * 1e3));
   // Robust start: the sample with the smallest median angle to (up to 50 of) the others.
   const int stride = std::max(1, n / 50);
   int best = 0;
@@ -516,7 +509,7 @@ RelativePoseResult InitCameraRelativePose(const std::string& camera_i,
   result.translation_spread_m = Median(trans_dev);
   const Eigen::Vector3d& p = result.T_Ci_Cj.translation();
   result.summary =
-      pair_name + Format(
+      pair_name + FormatInitLine(
                       ": T_Ci_Cj rotation %.3f deg, translation [%.4f %.4f %.4f] m from %d "
                       "of %d view pairs (median spread %.3f deg, %.2f mm)",
                       Eigen::AngleAxisd(q_mean).angle() * 180.0 / M_PI, p.x(), p.y(), p.z(),

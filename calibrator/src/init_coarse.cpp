@@ -16,17 +16,6 @@ namespace ctcal {
 
 namespace {
 
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), fmt, args...);
-  return buffer;
-}
-
-double Seconds(std::int64_t t_ns) {
-  return 1e-9 * static_cast<double>(t_ns);
-}
-
 std::int64_t Nanoseconds(double t_s) {
   return static_cast<std::int64_t>(std::llround(t_s * 1e9));
 }
@@ -79,7 +68,7 @@ class CoarseInit {
         [](const CameraViews& a, const CameraViews& b) { return a.views.size() < b.views.size(); });
 
     Log("  time offsets (rate correlation, +-" +
-        Format("%.0f ms around each guess)", options_.max_offset_s * 1e3));
+        FormatInitLine("%.0f ms around each guess)", options_.max_offset_s * 1e3));
     for (auto& sp : state_.sensors())
       if (!sp->is_base)
         InitOffset(*sp);
@@ -170,14 +159,14 @@ class CoarseInit {
     for (Eigen::Index i = 0; i < delta.size() && i < static_cast<Eigen::Index>(sigma.size()); ++i)
       worst = std::max(worst, std::abs(delta[i]) / sigma[static_cast<std::size_t>(i)]);
     if (worst <= options_.prior_gate) {
-      Log(Format("    %s.%s: guess kept (the data agree within %.1f of its prior sigmas)",
-                 s.name().c_str(), what.c_str(), worst));
+      Log(FormatInitLine("    %s.%s: guess kept (the data agree within %.1f of its prior sigmas)",
+                         s.name().c_str(), what.c_str(), worst));
       return false;
     }
     Warn(
-        Format("%s.%s: the data disagree with the guess by %.1f prior sigmas (gate %.1f): "
-               "started from the data's value, the prior stays on the guess",
-               s.name().c_str(), what.c_str(), worst, options_.prior_gate));
+        FormatInitLine("%s.%s: the data disagree with the guess by %.1f prior sigmas (gate %.1f): "
+                       "started from the data's value, the prior stays on the guess",
+                       s.name().c_str(), what.c_str(), worst, options_.prior_gate));
     return Replaced(s, what);
   }
   bool Replaced(const SensorState& s, const std::string& what) {
@@ -208,10 +197,11 @@ class CoarseInit {
     for (const auto& [stamp, n] : per_frame)
       frames += n >= options_.min_corners ? 1 : 0;
     const auto too_few = [&](int views) {
-      return InitError("board poses", s.name(),
-                       Format("too few views of the board: sensors.%s has %d frames with a board "
-                              "pose from >= %d corners, need %d",
-                              s.name().c_str(), views, options_.min_corners, options_.min_views));
+      return InitError(
+          "board poses", s.name(),
+          FormatInitLine("too few views of the board: sensors.%s has %d frames with a board "
+                         "pose from >= %d corners, need %d",
+                         s.name().c_str(), views, options_.min_corners, options_.min_views));
     };
     if (frames < options_.min_views)
       throw too_few(frames);
@@ -232,13 +222,14 @@ class CoarseInit {
       if (r && options_.policy == GuessPolicy::kBeyondPrior &&
           (HasPrior(s, "intrinsics") || HasPrior(s, "distortion_coeffs"))) {
         if (r->rms_px_guess <= options_.guess_rms_ratio * r->rms_px) {
-          Log(Format("    %s.intrinsics: guess kept (RMS %.3f px, the data's model %.3f px)",
-                     s.name().c_str(), r->rms_px_guess, r->rms_px));
+          Log(FormatInitLine(
+              "    %s.intrinsics: guess kept (RMS %.3f px, the data's model %.3f px)",
+              s.name().c_str(), r->rms_px_guess, r->rms_px));
         } else {
-          Warn(
-              Format("%s.intrinsics: the guess reprojects at %.3f px RMS, the data's model at "
-                     "%.3f px: started from the data's model, the prior stays on the guess",
-                     s.name().c_str(), r->rms_px_guess, r->rms_px));
+          Warn(FormatInitLine(
+              "%s.intrinsics: the guess reprojects at %.3f px RMS, the data's model at "
+              "%.3f px: started from the data's model, the prior stays on the guess",
+              s.name().c_str(), r->rms_px_guess, r->rms_px));
           Replaced(s, "intrinsics");
           s.camera->SetParams(r->camera.params());
         }
@@ -286,16 +277,17 @@ class CoarseInit {
     }();
     // Overlap with the base at the guess, widened by the search range.
     if (!rates.empty()) {
-      const double lo = Seconds(rates.front().t_ns) + guess,
-                   hi = Seconds(rates.back().t_ns) + guess;
-      const double b_lo = Seconds(base_rates_.front().t_ns),
-                   b_hi = Seconds(base_rates_.back().t_ns);
+      const double lo = InitSeconds(rates.front().t_ns) + guess,
+                   hi = InitSeconds(rates.back().t_ns) + guess;
+      const double b_lo = InitSeconds(base_rates_.front().t_ns),
+                   b_hi = InitSeconds(base_rates_.back().t_ns);
       if (std::min(hi, b_hi) - std::max(lo, b_lo) < 1.0 - 2.0 * options_.max_offset_s)
         throw InitError(
             "time offset", s.name(),
-            Format("sensor time ranges do not overlap: sensors.%s [%.3f, %.3f] s on "
-                   "the base clock at time_offset %.3f s, base %s [%.3f, %.3f] s",
-                   s.name().c_str(), lo, hi, guess, state_.base().name().c_str(), b_lo, b_hi));
+            FormatInitLine("sensor time ranges do not overlap: sensors.%s [%.3f, %.3f] s on "
+                           "the base clock at time_offset %.3f s, base %s [%.3f, %.3f] s",
+                           s.name().c_str(), lo, hi, guess, state_.base().name().c_str(), b_lo,
+                           b_hi));
     }
     // The stage searches lags around 0: stamp the rates at the guessed base time.
     std::vector<RateSample> shifted = rates;
@@ -315,8 +307,8 @@ class CoarseInit {
       return;
     }
     const double found = guess + r.time_offset;
-    Log(Format("    %s: time offset %+.3f ms on the base clock (guess %+.3f ms)", s.name().c_str(),
-               found * 1e3, guess * 1e3));
+    Log(FormatInitLine("    %s: time offset %+.3f ms on the base clock (guess %+.3f ms)",
+                       s.name().c_str(), found * 1e3, guess * 1e3));
     Eigen::VectorXd delta(1);
     delta[0] = r.time_offset;
     if (Replace(s, "time_offset", delta, PriorSigmas(s, {{"time_offset", 1}})))
@@ -472,8 +464,9 @@ CoarseInitResult InitializeFromData(CalibrationState* state,
     std::string replaced;
     for (const std::string& r : result.replaced)
       replaced += " " + r;
-    log(Format("  initialisation done in %.2f s (CPU %.2f s); taken from the data:", result.seconds,
-               static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC) +
+    log(FormatInitLine(
+            "  initialisation done in %.2f s (CPU %.2f s); taken from the data:", result.seconds,
+            static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC) +
         (replaced.empty() ? std::string(" nothing (every guess agrees with its prior)")
                           : replaced));
   }

@@ -13,17 +13,6 @@ namespace ctcal {
 
 namespace {
 
-double Seconds(std::int64_t t_ns) {
-  return static_cast<double>(t_ns) * 1e-9;
-}
-
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), fmt, args...);
-  return buffer;
-}
-
 double HuberWeight(double r, double k) {
   return r <= k ? 1.0 : k / r;
 }
@@ -33,7 +22,7 @@ template <typename Sample>
 long Bracket(const std::vector<Sample>& samples, double t) {
   const auto it =
       std::upper_bound(samples.begin(), samples.end(), t,
-                       [](double value, const Sample& s) { return value < Seconds(s.t_ns); });
+                       [](double value, const Sample& s) { return value < InitSeconds(s.t_ns); });
   return static_cast<long>(it - samples.begin()) - 1;
 }
 
@@ -45,7 +34,7 @@ bool InterpolateImu(const std::vector<ImuSample>& imu, double t, Eigen::Vector3d
     return false;
   const ImuSample& s0 = imu[static_cast<std::size_t>(i)];
   const ImuSample& s1 = imu[static_cast<std::size_t>(i + 1)];
-  const double t0 = Seconds(s0.t_ns), t1 = Seconds(s1.t_ns);
+  const double t0 = InitSeconds(s0.t_ns), t1 = InitSeconds(s1.t_ns);
   const double u = (t - t0) / (t1 - t0);
   if (w)
     *w = (1.0 - u) * s0.w_m + u * s1.w_m;
@@ -63,7 +52,7 @@ bool InterpolateCameraRotation(const std::vector<BoardView>& views, double max_g
     return false;
   const BoardView& v0 = views[static_cast<std::size_t>(i)];
   const BoardView& v1 = views[static_cast<std::size_t>(i + 1)];
-  const double t0 = Seconds(v0.t_ns), t1 = Seconds(v1.t_ns);
+  const double t0 = InitSeconds(v0.t_ns), t1 = InitSeconds(v1.t_ns);
   if (t1 - t0 > max_gap)
     return false;
   const Eigen::Quaterniond q0(v0.T_C_W.linear().transpose());
@@ -80,7 +69,7 @@ bool CameraVelocity(const std::vector<BoardView>& views, double t, double half_w
   Eigen::Matrix3d Atp = Eigen::Matrix3d::Zero();  // one column per coordinate
   int n = 0;
   for (const BoardView& view : views) {
-    const double dt = Seconds(view.t_ns) - t;
+    const double dt = InitSeconds(view.t_ns) - t;
     if (std::abs(dt) > half_window)
       continue;
     const Eigen::Vector3d p_W_C = view.T_C_W.inverse().translation();
@@ -99,7 +88,7 @@ bool CameraVelocity(const std::vector<BoardView>& views, double t, double half_w
 double MedianFramePeriod(const std::vector<BoardView>& views) {
   std::vector<double> gaps;
   for (std::size_t k = 1; k < views.size(); ++k)
-    gaps.push_back(Seconds(views[k].t_ns) - Seconds(views[k - 1].t_ns));
+    gaps.push_back(InitSeconds(views[k].t_ns) - InitSeconds(views[k - 1].t_ns));
   if (gaps.empty())
     return 0.0;
   std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
@@ -123,7 +112,7 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
   std::vector<Eigen::Vector3d> w_B, w_S;
   std::size_t cursor = 0;
   for (const RateSample& r : sensor_rates) {
-    const double t = Seconds(r.t_ns) + time_offset;
+    const double t = InitSeconds(r.t_ns) + time_offset;
     Eigen::Vector3d w;
     if (!base.RateOver(t - 0.5 * r.span, t + 0.5 * r.span, &w, &cursor))
       continue;
@@ -132,10 +121,11 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
   }
   const int n = static_cast<int>(w_B.size());
   if (n < options.min_pairs)
-    throw InitError(kStage, sensor_name,
-                    Format("only %d rate pairs overlap the base gyroscope at time offset %+.1f ms "
-                           "(need %d)",
-                           n, time_offset * 1e3, options.min_pairs));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("only %d rate pairs overlap the base gyroscope at time offset %+.1f ms "
+                       "(need %d)",
+                       n, time_offset * 1e3, options.min_pairs));
 
   HandEyeResult result;
   result.pairs = n;
@@ -185,15 +175,16 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
   // A rotation about one axis only leaves the rotation about that axis free: the second
   // singular value of the rate cross-covariance measures the excitation of a second axis.
   if (result.singular_values[1] < options.min_excitation)
-    throw InitError(kStage, sensor_name,
-                    Format("rotation excites fewer than two axes (rate spread %.3f, %.3f, %.3f "
-                           "rad/s; need >= %.3f on the second)",
-                           result.singular_values[0], result.singular_values[1],
-                           result.singular_values[2], options.min_excitation));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("rotation excites fewer than two axes (rate spread %.3f, %.3f, %.3f "
+                       "rad/s; need >= %.3f on the second)",
+                       result.singular_values[0], result.singular_values[1],
+                       result.singular_values[2], options.min_excitation));
   const Eigen::AngleAxisd aa(R);
   result.summary =
       sensor_name +
-      Format(
+      FormatInitLine(
           ": R_B_S angle %.3f deg about [%.3f %.3f %.3f], bias term c_B [%.4f %.4f %.4f] "
           "rad/s, RMS %.4f rad/s, %d pairs, excitation %.2f/%.2f/%.2f rad/s",
           aa.angle() * 180.0 / M_PI, aa.axis().x(), aa.axis().y(), aa.axis().z(), c.x(), c.y(),
@@ -215,7 +206,7 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
   std::vector<Eigen::Vector3d> y;
   const double h = options.diff_half_window;
   for (const ImuSample& s : sensor) {
-    const double t = Seconds(s.t_ns) + time_offset;
+    const double t = InitSeconds(s.t_ns) + time_offset;
     Eigen::Vector3d w_B, a_B, w_minus, w_plus;
     if (!InterpolateImu(base, t, &w_B, &a_B) || !InterpolateImu(base, t - h, &w_minus, nullptr) ||
         !InterpolateImu(base, t + h, &w_plus, nullptr))
@@ -230,10 +221,11 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
   }
   const int n = static_cast<int>(A.size());
   if (n < 20)
-    throw InitError(kStage, sensor_name,
-                    Format("only %d accelerometer samples overlap the base IMU at time offset "
-                           "%+.1f ms",
-                           n, time_offset * 1e3));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("only %d accelerometer samples overlap the base IMU at time offset "
+                       "%+.1f ms",
+                       n, time_offset * 1e3));
   LeverArmResult result;
   result.samples = n;
   std::vector<double> weight(static_cast<std::size_t>(n), 1.0);
@@ -270,12 +262,13 @@ LeverArmResult InitLeverArm(const std::string& sensor_name, const std::vector<Im
   result.sigma_t_B_S = cov.diagonal().head<3>().cwiseSqrt();
   const double min_excitation = std::sqrt(std::max(0.0, eig.eigenvalues()[0] / n));
   if (min_excitation < options.min_excitation)
-    throw InitError(kStage, sensor_name,
-                    Format("rotation does not excite the lever arm in every direction (%.3f < "
-                           "%.3f rad/s^2 on the weakest, t_B_S ~ [%.3f %.3f %.3f] m)",
-                           min_excitation, options.min_excitation, x[0], x[1], x[2]));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("rotation does not excite the lever arm in every direction (%.3f < "
+                       "%.3f rad/s^2 on the weakest, t_B_S ~ [%.3f %.3f %.3f] m)",
+                       min_excitation, options.min_excitation, x[0], x[1], x[2]));
   result.summary =
-      sensor_name + Format(
+      sensor_name + FormatInitLine(
                         ": t_B_S [%.4f %.4f %.4f] m (1-sigma [%.4f %.4f %.4f]), accel bias term "
                         "[%.3f %.3f %.3f] m/s^2, RMS %.3f m/s^2, %d samples",
                         x[0], x[1], x[2], result.sigma_t_B_S[0], result.sigma_t_B_S[1],
@@ -297,7 +290,7 @@ GravityResult InitGravity(const std::string& base_name, const std::vector<ImuSam
   std::vector<Eigen::Vector3d> g;
   std::vector<double> a_norm;
   for (const ImuSample& s : base) {
-    const double t_B = Seconds(s.t_ns);
+    const double t_B = InitSeconds(s.t_ns);
     Eigen::Quaterniond q_W_C;
     if (!InterpolateCameraRotation(views, max_gap, t_B - cam_time_offset, &q_W_C))
       continue;
@@ -309,8 +302,8 @@ GravityResult InitGravity(const std::string& base_name, const std::vector<ImuSam
   const int n = static_cast<int>(g.size());
   if (n < options.min_samples)
     throw InitError(kStage, base_name,
-                    Format("only %d accelerometer samples lie between views of camera '%s'", n,
-                           camera_name.c_str()));
+                    FormatInitLine("only %d accelerometer samples lie between views of camera '%s'",
+                                   n, camera_name.c_str()));
   // The span to average: everything, or the window with the least accelerometer scatter.
   std::size_t first = 0, last = g.size();
   if (options.method == GravityOptions::Method::kLowMotionWindow) {
@@ -337,9 +330,10 @@ GravityResult InitGravity(const std::string& base_name, const std::vector<ImuSam
       s2 -= a_norm[i] * a_norm[i];
     }
     if (!std::isfinite(best))
-      throw InitError(kStage, base_name,
-                      Format("no %.1f s window of accelerometer samples under camera '%s' views",
-                             options.window, camera_name.c_str()));
+      throw InitError(
+          kStage, base_name,
+          FormatInitLine("no %.1f s window of accelerometer samples under camera '%s' views",
+                         options.window, camera_name.c_str()));
   }
   // Samples are at the IMU's (uniform) rate, so their plain mean is the time average.
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -366,13 +360,14 @@ GravityResult InitGravity(const std::string& base_name, const std::vector<ImuSam
   result.t1 = t[last - 1];
   result.accel_std = std::sqrt(std::max(0.0, s2 / m - (s1 / m) * (s1 / m)));
   if (mean.norm() < 0.5 * gravity_magnitude)
-    throw InitError(kStage, base_name,
-                    Format("mean specific force %.2f m/s^2 is far below gravity %.2f: the camera "
-                           "orientation or the rig's R_B_C of '%s' is inconsistent",
-                           mean.norm(), gravity_magnitude, camera_name.c_str()));
+    throw InitError(
+        kStage, base_name,
+        FormatInitLine("mean specific force %.2f m/s^2 is far below gravity %.2f: the camera "
+                       "orientation or the rig's R_B_C of '%s' is inconsistent",
+                       mean.norm(), gravity_magnitude, camera_name.c_str()));
   result.g_W = gravity_magnitude * mean.normalized();
   result.summary =
-      base_name + Format(
+      base_name + FormatInitLine(
                       ": g_W [%.4f %.4f %.4f] m/s^2 (mean |f| %.3f) from %.1f-%.1f s, %d "
                       "samples, |a| std %.3f m/s^2",
                       result.g_W.x(), result.g_W.y(), result.g_W.z(), mean.norm(), result.t0,

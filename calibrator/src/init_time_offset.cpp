@@ -15,10 +15,6 @@ namespace {
 
 constexpr const char* kStage = "time offset";
 
-double Seconds(std::int64_t t_ns) {
-  return static_cast<double>(t_ns) * 1e-9;
-}
-
 struct Correlation {
   double value = -1.0;
   int samples = 0;
@@ -58,13 +54,6 @@ Correlation CorrelateAt(const BaseRateIntegral& base, const std::vector<double>&
   return c;
 }
 
-template <typename... Args>
-std::string Format(const char* fmt, Args... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), fmt, args...);
-  return buffer;
-}
-
 }  // namespace
 
 TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
@@ -99,7 +88,7 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   std::vector<double> sensor_t, sensor_span, sensor_mag;
   double sum = 0, sum_sq = 0;
   for (const RateSample& r : sensor_rates) {
-    sensor_t.push_back(Seconds(r.t_ns));
+    sensor_t.push_back(InitSeconds(r.t_ns));
     sensor_span.push_back(r.span);
     const double m = (r.span == 0.0 ? (r.w_S - bias_S) : r.w_S).norm();
     sensor_mag.push_back(m);
@@ -110,10 +99,11 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   TimeOffsetResult result;
   result.rate_std = std::sqrt(std::max(0.0, sum_sq / n - (sum / n) * (sum / n)));
   if (result.rate_std < options.min_rate_std)
-    throw InitError(kStage, sensor_name,
-                    Format("ambiguous correlation: no rotation (rate magnitude std %.4f rad/s < "
-                           "%.4f)",
-                           result.rate_std, options.min_rate_std));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("ambiguous correlation: no rotation (rate magnitude std %.4f rad/s < "
+                       "%.4f)",
+                       result.rate_std, options.min_rate_std));
 
   // Coarse search on the lag grid.
   const int half = static_cast<int>(std::round(options.max_offset / options.coarse_step));
@@ -153,24 +143,26 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   const double coarse_lag = (p - half) * options.coarse_step;
   result.peak_correlation = corr[static_cast<std::size_t>(p)];
   if (p == 0 || p + 1 == static_cast<int>(corr.size()))
-    throw InitError(kStage, sensor_name,
-                    Format("correlation peak at the search boundary (%+.1f ms, max +-%.0f ms): "
-                           "the offset is larger than the search range or the motion has no "
-                           "distinct features",
-                           coarse_lag * 1e3, options.max_offset * 1e3));
+    throw InitError(
+        kStage, sensor_name,
+        FormatInitLine("correlation peak at the search boundary (%+.1f ms, max +-%.0f ms): "
+                       "the offset is larger than the search range or the motion has no "
+                       "distinct features",
+                       coarse_lag * 1e3, options.max_offset * 1e3));
   if (result.peak_correlation < options.min_peak_correlation)
     throw InitError(
         kStage, sensor_name,
-        Format("ambiguous correlation: peak %.3f < %.2f at %+.1f ms (rates do not "
-               "match: wrong sensor data or too little rotation)",
-               result.peak_correlation, options.min_peak_correlation, coarse_lag * 1e3));
+        FormatInitLine("ambiguous correlation: peak %.3f < %.2f at %+.1f ms (rates do not "
+                       "match: wrong sensor data or too little rotation)",
+                       result.peak_correlation, options.min_peak_correlation, coarse_lag * 1e3));
   if (result.secondary_correlation > options.max_secondary_ratio * result.peak_correlation)
     throw InitError(
         kStage, sensor_name,
-        Format("ambiguous correlation: peaks %.3f at %+.1f ms and %.3f at %+.1f ms (periodic "
-               "or featureless motion)",
-               result.peak_correlation, coarse_lag * 1e3, result.secondary_correlation,
-               result.secondary_offset * 1e3));
+        FormatInitLine(
+            "ambiguous correlation: peaks %.3f at %+.1f ms and %.3f at %+.1f ms (periodic "
+            "or featureless motion)",
+            result.peak_correlation, coarse_lag * 1e3, result.secondary_correlation,
+            result.secondary_offset * 1e3));
 
   // Fine grid around the coarse peak, then a parabola through the best point's neighbours.
   const int fine_half = static_cast<int>(std::ceil(2.0 * options.coarse_step / options.fine_step));
@@ -227,7 +219,7 @@ TimeOffsetResult InitTimeOffset(const std::string& sensor_name,
   result.peak_correlation = std::max(result.peak_correlation, at_peak.value);
   result.samples = at_peak.samples;
   result.summary = sensor_name + ": " +
-                   Format(
+                   FormatInitLine(
                        "time offset %+.3f ms (correlation %.4f, next peak %.3f at %+.1f ms, "
                        "%d samples)",
                        result.time_offset * 1e3, result.peak_correlation,

@@ -11,14 +11,10 @@
 
 #include "ctcal/calibrator/discrete/frame_corners.h"
 #include "ctcal/spline/so3_manifold.h"
+#include "discrete_test_utils.h"
 
 namespace ctcal::discrete {
 namespace {
-
-Eigen::Vector3d Rand3(std::mt19937* rng, double s) {
-  std::uniform_real_distribution<double> u(-s, s);
-  return Eigen::Vector3d(u(*rng), u(*rng), u(*rng));
-}
 
 struct Evaluated {
   double cost = 0.0;
@@ -50,30 +46,8 @@ class DiscreteFrameCornersTest : public ::testing::TestWithParam<std::tuple<bool
  protected:
   void SetUp() override {
     std::mt19937 rng(11);
-    for (Keyframe* k : {&k0_, &k1_}) {
-      const Eigen::Quaterniond q = ExpSO3<double>(Rand3(&rng, 0.3));
-      k->q_W_B = {q.x(), q.y(), q.z(), q.w()};
-      const Eigen::Vector3d p = Rand3(&rng, 0.05) + Eigen::Vector3d(0.0, 0.0, 0.6);
-      const Eigen::Vector3d v = Rand3(&rng, 0.5);
-      for (int i = 0; i < 3; ++i) {
-        k->p_W_B[static_cast<std::size_t>(i)] = p(i);
-        k->v_W[static_cast<std::size_t>(i)] = v(i);
-      }
-      const Eigen::Vector3d bg = Rand3(&rng, 0.01), ba = Rand3(&rng, 0.1);
-      k->b_g = {bg.x(), bg.y(), bg.z()};
-      k->b_a = {ba.x(), ba.y(), ba.z()};
-      k->raw.w_m = Rand3(&rng, 1.0);
-      k->raw.a_m = Rand3(&rng, 3.0) + Eigen::Vector3d(0, 0, 9.8);
-    }
-    k0_.t = 1.0;
-    k1_.t = 1.025;
-    k0_.raw.t = k0_.t;
-    k1_.raw.t = k1_.t;
-    Eigen::Matrix3d D;
-    D << 1.01, 0.004, -0.003, 0, 0.99, 0.002, 0, 0, 1.005;
-    base_.SetD_w(D);
-    base_.SetD_a(D * 0.99);
-    base_.SetRotation(ExpSO3<double>(Eigen::Vector3d(0.01, -0.02, 0.015)).toRotationMatrix());
+    test::RandomKeyframes(&rng, 0.3, 0.05, Eigen::Vector3d(0.0, 0.0, 0.6), 0.025, &k0_, &k1_);
+    test::SetBaseScaleAndRotation(&base_);
     // The camera looks down the base frame's -z (towards the board at z = 0 in W).
     const Eigen::Quaterniond q_B_C(
         ExpSO3<double>(Eigen::Vector3d(M_PI, 0.0, 0.0) + Eigen::Vector3d(0.02, -0.03, 0.01)));

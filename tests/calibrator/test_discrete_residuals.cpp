@@ -14,21 +14,13 @@
 #include "ctcal/calibrator/discrete/discrete_residuals.h"
 #include "ctcal/sim/scenario.h"
 #include "ctcal/spline/so3_manifold.h"
+#include "discrete_test_utils.h"
 
 namespace ctcal::discrete {
 namespace {
 
-Eigen::Vector3d Rand3(std::mt19937* rng, double s) {
-  std::uniform_real_distribution<double> u(-s, s);
-  return Eigen::Vector3d(u(*rng), u(*rng), u(*rng));
-}
-
-void SetQuat(std::array<double, 4>* q, const Eigen::Quaterniond& r) {
-  *q = {r.x(), r.y(), r.z(), r.w()};
-}
-void Set3(std::array<double, 3>* a, const Eigen::Vector3d& v) {
-  *a = {v.x(), v.y(), v.z()};
-}
+using test::Rand3;
+using test::SetQuat;
 
 // Central differences of `cost` on every block (quaternions through So3LeftManifold::Plus)
 // against its Jet Jacobian lifted to the same tangent space.
@@ -137,31 +129,15 @@ class DiscreteResiduals : public ::testing::Test {
  protected:
   void SetUp() override {
     std::mt19937 rng(7);
-    for (Keyframe* k : {&k0_, &k1_}) {
-      SetQuat(&k->q_W_B, ExpSO3<double>(Rand3(&rng, 1.0)));
-      Set3(&k->p_W_B, Rand3(&rng, 0.3) + Eigen::Vector3d(0, 0, -0.8));
-      Set3(&k->v_W, Rand3(&rng, 0.5));
-      Set3(&k->b_g, Rand3(&rng, 0.01));
-      Set3(&k->b_a, Rand3(&rng, 0.1));
-      k->raw.w_m = Rand3(&rng, 1.0);
-      k->raw.a_m = Rand3(&rng, 3.0) + Eigen::Vector3d(0, 0, 9.8);
-    }
+    test::RandomKeyframes(&rng, 1.0, 0.3, Eigen::Vector3d(0, 0, -0.8), 0.03, &k0_, &k1_);
     for (Keyframe* k : {&k0_, &k1_}) {
       k->raw_rate.w_m = Rand3(&rng, 5.0);
       k->raw_rate.a_m = Rand3(&rng, 20.0);
     }
-    k0_.t = 1.0;
-    k1_.t = 1.03;
-    k0_.raw.t = k0_.t;
-    k1_.raw.t = k1_.t;
-    Eigen::Matrix3d D;
-    D << 1.01, 0.004, -0.003, 0, 0.99, 0.002, 0, 0, 1.005;
-    base_.SetD_w(D);
-    base_.SetD_a(D * 0.99);
+    test::SetBaseScaleAndRotation(&base_);
     Eigen::Matrix3d T_g;
     T_g << 1e-3, 2e-4, -3e-4, 4e-4, -5e-4, 1e-4, 2e-4, 3e-4, 8e-4;
     base_.SetT_g(T_g);
-    base_.SetRotation(ExpSO3<double>(Eigen::Vector3d(0.01, -0.02, 0.015)).toRotationMatrix());
     // Smooth raw samples of an auxiliary sensor (any values: the checks are of derivatives).
     for (int k = 0; k < 100; ++k) {
       const double t = 0.9 + k / 300.0;

@@ -2,6 +2,8 @@
 // sensor, and the sink for the one-line findings each stage logs.
 #pragma once
 
+#include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -27,5 +29,18 @@ using InitLog = std::function<void(const std::string&)>;
 
 // Writes "[init] <line>" to stderr: the default sink of every stage.
 void LogInitToStderr(const std::string& line);
+
+// A finding or a reason, printf-style (up to 511 characters: one log line).
+template <typename... Args>
+std::string FormatInitLine(const char* fmt, Args... args) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof(buffer), fmt, args...);
+  return buffer;
+}
+
+// A stamp in seconds, the unit the stages compute and print times in.
+inline double InitSeconds(std::int64_t t_ns) {
+  return static_cast<double>(t_ns) * 1e-9;
+}
 
 }  // namespace ctcal
