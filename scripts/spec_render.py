@@ -175,19 +175,19 @@ def unproject(cam, u, v, start=None):
     return rays
 
 
-def lattice(n, g):
-    """n sample offsets in the unit square, (i + 1/2) / n and ((g i) mod n + 1/2) / n: a rank-1
-    lattice, every column and row of an n x n grid once, so that an edge of any direction is
-    resolved to ~1/n of a pixel (a regular sqrt(n) x sqrt(n) grid: 1/sqrt(n) along the axes)."""
-    return [((i + 0.5) / n, ((g * i) % n + 0.5) / n) for i in range(n)]
+# A pixel's 16 samples: (i + 1/2) / 16 and ((7 i + 3) mod 16 + 1/2) / 16, a shifted rank-1
+# lattice that takes every column and row of a 16 x 16 grid once, so that an edge of any direction
+# is resolved to ~1/16 of a pixel (a regular 4 x 4 grid: 1/4 along the axes). The shift 3 makes it
+# symmetric about the pixel's centre (sample 15 - i is sample i mirrored): without it, corners
+# measured in the images move by -0.002 px in u and v against 256 samples per pixel.
+SAMPLES = [((i + 0.5) / 16, ((7 * i + 3) % 16 + 0.5) / 16) for i in range(16)]
 
 
 class CameraRays:
-    """A camera's rays through its pixel corners and through its pixels' subsamples. 16 samples
-    on the lattice of generator 7 leave 7.4 grey levels RMS on edge pixels against 256 samples
-    (a regular 4 x 4 grid: 14.6)."""
+    """A camera's rays through its pixel corners and through its pixels' subsamples (SAMPLES:
+    against 256 samples per pixel, ~7 grey levels RMS on edge pixels; a regular 4 x 4 grid: 14.6)."""
 
-    def __init__(self, cam, samples=lattice(16, 7)):
+    def __init__(self, cam, samples=SAMPLES):
         self.width, self.height = cam["resolution"]
         u, v = np.meshgrid(np.arange(self.width + 1) - 0.5, np.arange(self.height + 1) - 0.5)
         c = self.corners = unproject(cam, u, v)  # (H+1, W+1, 3)
