@@ -290,8 +290,9 @@ void ExpectTrajectory(const fs::path& data, const fs::path& out) {
 // bias (<= 0.006 px) with a margin. A corner a few pixels from the image's edge, whose
 // neighbourhood the edge cuts, may be refined up to a few pixels off (seed 7: one of 10276, 3.6 px,
 // 7.7 px from the top edge; a detector matter, reported): at most 1 in 1000, and only there.
-void ExpectDetectionsMatchTheRendering(const fs::path& data, const fs::path& out,
-                                       const SensorConfig& cam, int num_corners) {
+// Returns the corners' RMS error over the RMS of the sigmas the detector gave them (1: honest).
+double ExpectDetectionsMatchTheRendering(const fs::path& data, const fs::path& out,
+                                         const SensorConfig& cam, int num_corners) {
   const std::vector<CornerObservation> truth =
       ReadCornersCsv((data / "groundtruth" / cam.name / "corners.csv").string(), num_corners);
   const std::vector<CornerObservation> found =
@@ -300,7 +301,7 @@ void ExpectDetectionsMatchTheRendering(const fs::path& data, const fs::path& out
   for (const CornerObservation& c : truth)
     exact[{c.t_ns, c.corner_id}] = Eigen::Vector2d(c.u, c.v);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-  double sum_sq = 0.0;
+  double sum_sq = 0.0, sigma_sq = 0.0;
   int matched = 0, far_off = 0;
   for (const CornerObservation& c : found) {
     const auto it = exact.find({c.t_ns, c.corner_id});
@@ -320,18 +321,26 @@ void ExpectDetectionsMatchTheRendering(const fs::path& data, const fs::path& out
     }
     sum += e;
     sum_sq += e.squaredNorm();
+    sigma_sq += std::pow(c.sigma.value_or(cam.pixel_sigma), 2);
   }
-  ASSERT_GT(matched, static_cast<int>(truth.size()) / 3) << cam.name;
-  ASSERT_GT(matched, static_cast<int>(found.size()) * 9 / 10) << cam.name;
+  EXPECT_GT(matched, static_cast<int>(truth.size()) / 3) << cam.name;
+  EXPECT_GT(matched, static_cast<int>(found.size()) * 9 / 10) << cam.name;
+  if (matched - far_off < 100) {
+    ADD_FAILURE() << cam.name << ": " << matched << " corners matched";
+    return 1.0;
+  }
   const Eigen::Vector2d mean = sum / (matched - far_off);
   const double rms = std::sqrt(sum_sq / (2.0 * (matched - far_off)));
+  const double sigma_rms = std::sqrt(sigma_sq / (matched - far_off));
   std::printf(
       "  %-8s %d of %d rendered corners detected, error mean (%+.4f, %+.4f) px, "
-      "RMS %.4f px per axis, %d beyond 1 px\n",
-      cam.name.c_str(), matched, static_cast<int>(truth.size()), mean.x(), mean.y(), rms, far_off);
+      "RMS %.4f px per axis (the detector's sigma: %.4f px), %d beyond 1 px\n",
+      cam.name.c_str(), matched, static_cast<int>(truth.size()), mean.x(), mean.y(), rms, sigma_rms,
+      far_off);
   EXPECT_LT(mean.norm(), 0.02) << cam.name;
   EXPECT_LT(rms, 0.1) << cam.name;
   EXPECT_LE(far_off * 1000, matched) << cam.name;
+  return rms / sigma_rms;
 }
 
 struct CheckOptions {
@@ -355,19 +364,28 @@ void CheckCalibration(const std::string& stem, const std::string& args,
   const RigConfig guess = LoadRig((data / "rig.yaml").string(), &warnings);
   const RigConfig result = LoadRig(data.string() + "_out/result.yaml", &warnings);
   ExpectCoarseGuess(truth, guess);
+  issue7::Issue7Tolerances tolerances = options.tolerances;
   if (options.images) {
+    // The sigmas rest on the detector's corner sigmas; where those understate the corners' true
+    // scatter (measured here against the rendering), an estimate within 4 of its sigma is
+    // checked against the sigma scaled by that ratio (docs/initialisation.md, "Rendered by the
+    // independent program"). An honest detector gives ratio 1, the plain check.
+    double understated = 1.0;
     for (const SensorConfig& s : truth.sensors) {
       if (s.type != SensorType::kCamera)
         continue;
       EXPECT_FALSE(fs::exists(data / s.name / "corners.csv")) << s.name << ": images only";
-      ExpectDetectionsMatchTheRendering(data, data.string() + "_out", s,
-                                        TargetCornerCount(truth.target));
+      understated =
+          std::max(understated, ExpectDetectionsMatchTheRendering(data, data.string() + "_out", s,
+                                                                  TargetCornerCount(truth.target)));
     }
+    tolerances.max_sigmas *= understated;
+    std::printf("  estimates checked within %.2f sigma\n", tolerances.max_sigmas);
   }
   // The recording is designed to determine everything (the fisheye sweeps its outer field), so no
   // scalar may be left without a finite sigma.
   const issue7::ToleranceReport r = issue7::ExpectWithinTolerances(
-      truth, result, [](const std::string&) { return false; }, options.tolerances);
+      truth, result, [](const std::string&) { return false; }, tolerances);
   ExpectKalibrFiles(truth, YAML::LoadFile((data / "truth.yaml").string()), data.string() + "_out");
   ExpectTrajectory(data, data.string() + "_out");
   std::printf(
