@@ -34,6 +34,7 @@ import numpy as np
 import spec_sim as sim
 
 BLACK, WHITE, BACKGROUND = 0.09, 0.86, 0.42  # reflectances: ink, paper, the wall behind the board
+VIGNETTING = 0.25  # the image corners' loss of light
 
 # --------------------------------------------------------------------------------------------
 # The tag bits.
@@ -260,7 +261,7 @@ def write_images(out, name, cam, traj, target, t0_ns, duration, rate, seed, blur
     W, H = rays.width, rays.height
     ld = cam.get("line_delay", 0.0)
     u, v = np.meshgrid(np.arange(W) - (W - 1) / 2.0, np.arange(H) - (H - 1) / 2.0)
-    vignetting = 1.0 - 0.25 * (u * u + v * v) / ((W / 2.0) ** 2 + (H / 2.0) ** 2)
+    vignetting = 1.0 - VIGNETTING * (u * u + v * v) / ((W / 2.0) ** 2 + (H / 2.0) ** 2)
     os.makedirs(os.path.join(out, name, "data"), exist_ok=True)
     lines, frames, seen = [], 0, 0
     for st in sim.stamps(t0_ns + 25000000, duration - 0.05, rate):
