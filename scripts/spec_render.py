@@ -17,9 +17,10 @@ corner ids follow: point (r, c) at (c, r) in tag units, a tag's bottom-left corn
 
 Each pixel is the mean of the board's reflectance over its area: the rays through the pixel's four
 corners decide whether it sees one shade (most pixels) or an edge, and an edge pixel is
-supersampled (16 samples). A ray is the pixel position unprojected by an iterative inverse of SPEC 4's
-projection (spec_sim.radtan / spec_sim.kannala_brandt), turned into the board frame by the camera's
-pose at the pixel row's read time t_S + v * line_delay, and cut with the plane z = 0. Then
+supersampled (16 samples). A ray is the pixel position unprojected by an iterative inverse of
+SPEC 4's projection (spec_sim.radtan / spec_sim.kannala_brandt), turned into the board frame by
+the camera's pose at the pixel row's read time t_S + v * line_delay, and cut with the plane z = 0.
+Then
 vignetting, a Gaussian blur (the lens), grey-level noise and 8-bit quantisation. numpy and OpenCV
 (Debian's python3-numpy, python3-opencv): call /usr/bin/python3.
 """
@@ -48,9 +49,11 @@ def tag36h11_data(tag_id):
     """The 6 x 6 data bits as printed (row 0 at the top seen from the printed side), True = white.
     OpenCV's DICT_APRILTAG_36h11 draws the codes turned by 180 deg against libapriltag's and
     Kalibr's print (check_tag_bits); printing OpenCV's drawing as is would decode to the right id
-    with every corner four places off, i.e. each tag's corner ids turned by 180 deg."""
+    with each tag's corners two places round (its corner ids turned by 180 deg)."""
     dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
-    drawing = cv2.aruco.drawMarker(dictionary, tag_id, 8, borderBits=1)
+    # OpenCV 4.7 renamed drawMarker generateImageMarker.
+    draw = getattr(cv2.aruco, "generateImageMarker", None) or cv2.aruco.drawMarker
+    drawing = draw(dictionary, tag_id, 8, borderBits=1)
     return np.rot90(drawing[1:7, 1:7] > 127, 2)
 
 
@@ -186,7 +189,8 @@ SAMPLES = [((i + 0.5) / 16, ((7 * i + 3) % 16 + 0.5) / 16) for i in range(16)]
 
 class CameraRays:
     """A camera's rays through its pixel corners and through its pixels' subsamples (SAMPLES:
-    against 256 samples per pixel, ~7 grey levels RMS on edge pixels; a regular 4 x 4 grid: 14.6)."""
+    against 256 samples per pixel, ~7 grey levels RMS on edge pixels; a regular 4 x 4 grid:
+    14.6)."""
 
     def __init__(self, cam, samples=SAMPLES):
         self.width, self.height = cam["resolution"]

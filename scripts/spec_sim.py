@@ -770,7 +770,8 @@ def main():
     print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s%s; %s; %.1f s" % (
         out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
         ", rolling shutter" if args.rolling_shutter else "",
-        ", images (tag bits checked against %s)" % tag_check if render else "", cameras, time.time() - wall))
+        ", images (tag bits checked against %s)" % tag_check if render else "", cameras,
+        time.time() - wall))
     return 0
 
 
