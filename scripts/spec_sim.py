@@ -707,6 +707,7 @@ def main():
     render = None
     if args.images:
         sys.modules.setdefault("spec_sim", sys.modules[__name__])  # spec_render uses this module
+        sys.dont_write_bytecode = True  # no __pycache__ in the source tree
         try:
             import spec_render as render
         except ImportError as e:
