@@ -174,7 +174,7 @@ std::string Recording(const std::string& name) {
 }
 
 // Each stream file of each inertial sensor, broken at its line 5 (header, then rows).
-TEST(BadInput, InertialFiles) {
+TEST(CalibrateBadInput, InertialFiles) {
   std::vector<Case> cases;
   for (const std::string s : {"imu0", "imu1", "gyro0"}) {
     const std::string file = s + "/data.csv";
@@ -223,7 +223,7 @@ TEST(BadInput, InertialFiles) {
   ExpectOneClearError(Recording("inertial"), cases);
 }
 
-TEST(BadInput, CornerFiles) {
+TEST(CalibrateBadInput, CornerFiles) {
   std::vector<Case> cases;
   for (const std::string cam : {"cam0", "cam1"}) {
     const std::string file = cam + "/corners.csv";
@@ -269,7 +269,7 @@ TEST(BadInput, CornerFiles) {
   ExpectOneClearError(Recording("corners"), cases);
 }
 
-TEST(BadInput, RigFile) {
+TEST(CalibrateBadInput, RigFile) {
   const auto edit = [](std::string from, std::string to) {
     return [=](const fs::path& d) { Replace(d / "rig.yaml", from, to); };
   };
@@ -356,7 +356,7 @@ TEST(BadInput, RigFile) {
 }
 
 // Cameras given as images (detection first): a 1 s recording, so that detection is short.
-TEST(BadInput, Images) {
+TEST(CalibrateBadInput, Images) {
   const std::string recording = test::SimulateOnce(
       "ctcal_bad_input_images", "--scenario full --seed 3 --duration 1 --images");
   const auto first_image = [](const fs::path& d, const std::string& cam) {
@@ -394,7 +394,7 @@ TEST(BadInput, Images) {
 }
 
 // Recordings that read well but cannot calibrate the rig.
-TEST(BadInput, Recordings) {
+TEST(CalibrateBadInput, Recordings) {
   const auto all_files = [](const fs::path& d, const std::function<void(const fs::path&)>& f) {
     for (const char* s : {"imu0", "imu1", "gyro0", "cam0", "cam1"})
       for (const char* file : {"data.csv", "corners.csv"})
@@ -435,7 +435,7 @@ TEST(BadInput, Recordings) {
 
 // An hour's gap in an auxiliary gyro's stream: a warning naming the file, and the samples before
 // the gap calibrate it (the ones an hour later are outside the trajectory and dropped).
-TEST(BadInput, AnHoursGapIsAWarningAndTheResultHoldsItsSigma) {
+TEST(CalibrateBadInput, AnHoursGapIsAWarningAndTheResultHoldsItsSigma) {
   const std::string recording = Recording("gap");
   const fs::path dir = recording + "_gap";
   fs::remove_all(dir);
