@@ -12,6 +12,7 @@
 #include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/calibrator/knot_spacing.h"
 #include "ctcal/calibrator/marginal_covariance.h"
+#include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/observability/motion_prediction.h"
 #include "ctcal/calibrator/observability/numeric_observability.h"
 #include "spline_problem_impl.h"
@@ -393,6 +394,7 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
     }
   }
 
+  LogMemory(log, "residual statistics");
   if (!options.compute_covariance)
     return;
 
@@ -420,6 +422,7 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
   // One Schur complement of the data; the priors (on calibration blocks only) add to it.
   const MarginalInformation info_data =
       ComputeMarginalInformation(problem, calib, data_only, options.threads);
+  LogMemory(log, "marginal information");
   MarginalInformation info = info_data;
   AddCalibrationInformation(problem, calib, prior_ids, &info);
   const CalibrationCovariance cov = InvertInformation(info);
@@ -490,7 +493,9 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
   CalibrationState state(rig);
   options.coarse_init.threads = options.threads;
   options.coarse_init.views_min_corners = options.min_corners_per_view;
+  LogMemory(log, "calibration starts");
   const CoarseInitResult init = InitializeFromData(&state, data, options.coarse_init, log);
+  LogMemory(log, "coarse initialisation");
   Prepared prep;
   log("[2/6] board views and data selection");
   const auto t_prepare = std::chrono::steady_clock::now();
@@ -503,6 +508,7 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
   log(Fmt("  trajectory: %.3f .. %.3f s (base clock), knot spacing %.4f s",
           1e-9 * static_cast<double>(prep.t0_ns), 1e-9 * static_cast<double>(prep.t1_ns),
           prep.knot_spacing_s));
+  LogMemory(log, "data selected");
 
   SplineCalibrationResult out;
   out.init_seconds =

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 
@@ -159,6 +160,7 @@ class IterationLogger : public ceres::IterationCallback {
                   s.cost, -s.cost_change, s.step_norm, s.step_is_successful ? "   " : "rej",
                   s.cumulative_time_in_seconds);
     log_(line);
+    LogMemory(log_, "iteration " + std::to_string(s.iteration));
     if (!std::isfinite(s.cost))
       return ceres::SOLVER_ABORT;
     return ceres::SOLVER_CONTINUE;
@@ -223,6 +225,7 @@ class SplineProblem {
                   spline_.NumKnots(), spline_.timing().dt_s(), poses.size(), imu.size(),
                   r.initial_cost, r.final_cost, r.iterations);
     log_(line);
+    LogMemory(log_, "trajectory fitted");
   }
 
   // --- the problem ------------------------------------------------------------------------------
@@ -272,6 +275,7 @@ class SplineProblem {
         P.SetParameterBlockConstant(b.values);
     }
     BoundCameraParameters(prep_.cameras, &P);
+    LogMemory(log_, "problem built");
   }
 
   ceres::Solver::Summary Solve() {
@@ -915,6 +919,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
                       s.jacobian_evaluation_time_in_seconds - s.linear_solver_time_in_seconds,
                   s.num_residual_blocks, s.num_residuals, cpu);
     log(line);
+    LogMemory(log, "solved");
     return s;
   };
   const ceres::Solver::Summary last = RunStages(&sp, solve, options.outlier_probability,
@@ -939,6 +944,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
                   out->covariance_seconds,
                   static_cast<double>(std::clock() - cpu_cov) / CLOCKS_PER_SEC);
     log(line);
+    LogMemory(log, "covariance");
   }
   if (options.report_data) {
     const auto t_report = Clock::now();
@@ -948,6 +954,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
     std::snprintf(line, sizeof line, "  report data: every measurement at the final values, %.2f s",
                   std::chrono::duration<double>(Clock::now() - t_report).count());
     log(line);
+    LogMemory(log, "report data");
   }
 }
 
