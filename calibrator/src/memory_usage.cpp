@@ -1,6 +1,9 @@
 #include "ctcal/calibrator/memory_usage.h"
 
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <unistd.h>
 
 #include <cstdio>
@@ -40,6 +43,12 @@ std::string MemoryNote(const std::string& where) {
   std::snprintf(line, sizeof line, "memory: RSS %.0f MB, peak %.0f MB (%s)", m.rss_mb, m.peak_mb,
                 where.c_str());
   return line;
+}
+
+void ReleaseFreedMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 void LogMemory(const std::function<void(const std::string&)>& log, const std::string& where) {

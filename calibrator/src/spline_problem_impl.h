@@ -451,6 +451,8 @@ class SplineProblem {
   }
 
   ceres::Problem& problem() { return *problem_; }
+  // Destroys the problem (its residual blocks); the values stay in the spline and the state.
+  void ReleaseProblem() { problem_.reset(); }
 
   // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
   Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
@@ -577,22 +579,31 @@ class SplineProblem {
       const std::int64_t stamp = cam->stamps[first];
       const int seg = SegmentOf(stamp, s.time_offset);
       segments_.push_back(seg);
-      std::vector<CornerMeasurement> corners;
-      for (std::size_t i = first; i < last; ++i) {
-        if (!cam->removed[i])
-          corners.push_back(cam->corners[i]);
-      }
       typename FrameCornersResidual<N, Rep>::Parameters p;
       p.traj = TrajBlocks(seg);
       p.q_B_C = s.q_B_S.data();
       p.t_B_C = s.t_B_S.data();
       p.time_offset = &s.time_offset;
       p.params = s.camera->mutable_params();
-      problem_->AddResidualBlock(
-          MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners),
-                                           SegmentClock::At(stamp, spline_.timing(), seg),
-                                           robust ? options_.huber_threshold : 0.0),
-          nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
+      const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
+      const double huber = robust ? options_.huber_threshold : 0.0;
+      ceres::CostFunction* cost = nullptr;
+      if (std::none_of(cam->removed.begin() + static_cast<std::ptrdiff_t>(first),
+                       cam->removed.begin() + static_cast<std::ptrdiff_t>(last),
+                       [](bool r) { return r; })) {
+        // The block reads the frame's corners where Prepare put them (prep_ outlives the
+        // problem): the corners are held once, not once more per block.
+        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), &cam->corners[first],
+                                                static_cast<int>(last - first), clock, huber);
+      } else {
+        std::vector<CornerMeasurement> corners;
+        for (std::size_t i = first; i < last; ++i) {
+          if (!cam->removed[i])
+            corners.push_back(cam->corners[i]);
+        }
+        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners), clock, huber);
+      }
+      problem_->AddResidualBlock(cost, nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
     });
   }
 
@@ -919,6 +930,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
                       s.jacobian_evaluation_time_in_seconds - s.linear_solver_time_in_seconds,
                   s.num_residual_blocks, s.num_residuals, cpu);
     log(line);
+    ReleaseFreedMemory();  // Ceres' Jacobian and factor of this solve
     LogMemory(log, "solved");
     return s;
   };
@@ -937,6 +949,8 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   const auto t_cov = Clock::now();
   const std::clock_t cpu_cov = std::clock();
   sp.Finish(out);
+  sp.ReleaseProblem();  // the report data need the spline only
+  ReleaseFreedMemory();
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
   {
     char line[160];

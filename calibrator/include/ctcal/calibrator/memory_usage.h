@@ -22,6 +22,10 @@ bool MemoryLogEnabled();
 // "memory: RSS 512 MB, peak 1024 MB (<where>)", or empty when !MemoryLogEnabled().
 std::string MemoryNote(const std::string& where);
 
+// Returns the heap's freed pages to the system (glibc's malloc_trim; a no-op elsewhere), so that
+// memory a finished stage freed is not still resident while the next stage peaks.
+void ReleaseFreedMemory();
+
 // Passes MemoryNote(where), indented, to `log` when MemoryLogEnabled().
 void LogMemory(const std::function<void(const std::string&)>& log, const std::string& where);
 
