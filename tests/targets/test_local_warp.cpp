@@ -3,6 +3,7 @@
 // a corner without neighbours on both sides gets no warp.
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "ctcal/targets/detector.h"
@@ -82,6 +83,34 @@ TEST(LocalBoardWarp, RejectsCornersOffASmoothMap) {
   CornerWarp warp;
   double px_per_m = 0.0;
   EXPECT_FALSE(LocalBoardWarp(board, corners, static_cast<size_t>(id), 1.0, &warp, &px_per_m));
+}
+
+// With no bending the warped refinement reads the same bilinear samples as the plain one: same
+// corner (to the float rounding of OpenCV's sampler), same sigma. A warp that bends the patch
+// (0.9 px at the window's edge) moves the result: the patch is really read through it.
+TEST(LocalBoardWarp, ZeroBendIsThePlainRefinement) {
+  cv::Mat image(64, 64, CV_8U, cv::Scalar(200));
+  const cv::Point2f q(31.3f, 32.6f);
+  // An X-junction at q: two opposite black quadrants, blurred.
+  for (int v = 0; v < image.rows; ++v)
+    for (int u = 0; u < image.cols; ++u)
+      if ((u - q.x) * (v - q.y) > 0.0f)
+        image.at<uint8_t>(v, u) = 40;
+  cv::Mat blurred;
+  cv::GaussianBlur(image, blurred, cv::Size(), 0.8);
+  Eigen::Vector2d plain(30.5, 33.4), warped = plain;
+  double sigma_plain = 0.0, sigma_warped = 0.0;
+  ASSERT_TRUE(RefineCorner(blurred, 5, &plain, &sigma_plain, 1.5));
+  CornerWarp warp;
+  warp.origin = warped;
+  ASSERT_TRUE(RefineCorner(blurred, 5, &warped, &sigma_warped, 1.5, &warp));
+  EXPECT_LT((plain - warped).norm(), 1e-3);
+  EXPECT_NEAR(sigma_plain, sigma_warped, 1e-3 * sigma_plain);
+  CornerWarp bent = warp;
+  bent.H_u << 0.05, 0.0, 0.0, 0.05;
+  Eigen::Vector2d moved = Eigen::Vector2d(30.5, 33.4);
+  ASSERT_TRUE(RefineCorner(blurred, 5, &moved, nullptr, 1.5, &bent));
+  EXPECT_GT((moved - plain).norm(), 0.01);
 }
 
 }  // namespace
