@@ -730,9 +730,9 @@ TEST(RenderDetect, RectifiedRefinementRemovesTheLensPull) {
   const RadtanCamera camera;
   const Board board(Grid6x6());
   const BoardRenderer renderer(board, 752, 480, Unprojection(camera));
-  DetectorOptions plain_options;
-  plain_options.rectify = false;
-  const Detector rectified(board), plain(board, plain_options);
+  DetectorOptions rectify_options;
+  rectify_options.rectify = true;
+  const Detector rectified(board, rectify_options), plain(board);
   // Mean error along the direction from the principal point, of corners 150-350 px from it.
   struct Radial {
     double sum = 0.0;

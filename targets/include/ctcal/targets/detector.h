@@ -48,10 +48,12 @@ struct DetectorOptions {
   // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
   // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
   bool refine = true;
-  // Every corner refined once more in a patch rectified by its grid neighbourhood's quadratic
-  // board map (LocalBoardWarp): without it the lens' bending pulls corners outward by up to
-  // 0.007 px at mid-field, which biases distortion and focal length (docs/targets.md).
-  bool rectify = true;
+  // Inner corners refined once more in a patch rectified by their grid neighbourhood's quadratic
+  // board map (LocalBoardWarp): it removes most of the lens' outward pull (0.007 px at mid-field)
+  // from them, but the board's edge corners keep it, and that difference biased a radtan focal
+  // length by 4.8 sigma on independently rendered images. Off until edge corners are rectified
+  // too (docs/targets.md).
+  bool rectify = false;
   double min_sigma_px = 0.01;
   // The model error is measured only on views with at least this many grid fits (5 corners in a
   // row or column each); on others it is taken as default_model_sigma_px (rendered views: 0.02-
