@@ -15,12 +15,13 @@ PACKAGES=(
   fonts-dejavu-core
   clang-format
   poppler-utils opencv-doc visp-images-data
-  chromium python3
+  chromium python3 python3-numpy python3-opencv
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
 # fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot.cpp);
 # poppler-utils (pdftoppm, pdftotext), chromium and python3 (scripts/spec_sim.py, standard
-# library only) are called by tests; opencv-doc and visp-images-data hold real board photos the
+# library only) are called by tests; python3-numpy and python3-opencv are what the independent
+# image renderer (scripts/spec_render.py, run by /usr/bin/python3) needs; opencv-doc and visp-images-data hold real board photos the
 # detector tests read.
 
 missing=()
