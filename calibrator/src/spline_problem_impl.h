@@ -756,7 +756,10 @@ class SplineProblem {
       const std::size_t count = set.functors.size();
       std::vector<double*> first = blocks_of(set.seg.front(), set.bseg.front());
       const std::vector<double*> common(first.begin() + R::kNumTrajBlocks, first.end());
-      const int K = InertialSegments(set, common);
+      const int compressed = InertialSegments(set, common);
+      const bool stacked = compressed == 0 && options_.analytic && options_.compress_inertial &&
+                           options_.stacked_inertial_segments > 0;
+      const int K = stacked ? std::min(options_.stacked_inertial_segments, 255) : compressed;
       if (K == 0) {
         for (std::size_t i = 0; i < count; ++i) {
           const typename R::Setup& setup = set.functors[i].s;
@@ -792,7 +795,7 @@ class SplineProblem {
         }
         ids.push_back(problem_->AddResidualBlock(
             new InertialBlockResidual<R>(std::move(functors), std::move(offsets), num_segments,
-                                         set.sizes, manifolds, 0.0),
+                                         set.sizes, manifolds, 0.0, stacked),
             nullptr, blocks));
         begin = end;
       }

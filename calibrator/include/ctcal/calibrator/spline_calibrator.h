@@ -58,6 +58,10 @@ struct SplineCalibratorOptions {
   // forces that run length on every inertial sensor (benchmarks and tests).
   bool compress_inertial = true;
   int inertial_block_segments = 0;
+  // Where the compression does not pay (the demo's rates), the samples of a run of
+  // `stacked_inertial_segments` segments as one uncompressed block (the same rows: fewer blocks
+  // for Ceres' per-block work; inertial_block_residual.h); 0: one block per sample there.
+  int stacked_inertial_segments = 1;
   int threads = 0;  // 0 = every core
   int max_iterations = 50;
   // Huber threshold on the norm of a whitened corner residual during the robust solve.
