@@ -80,7 +80,8 @@ CalibrationLog BenchLog() {
 // args: threads, compressed (0/1), analytic (0/1), inertial run length K (0: the sensor-rate
 // rule of InertialBlockSegments, -1: one block per sample, K > 0: compressed runs of K segments),
 // stacked: the run length of the uncompressed inertial blocks where the rule does not compress
-// (0: one block per sample there; SplineCalibratorOptions::stacked_inertial_segments).
+// (0: one block per sample there; SplineCalibratorOptions::stacked_inertial_segments),
+// robust_stop: SplineCalibratorOptions::robust_early_stop (0/1).
 void BM_Calibrate(benchmark::State& state) {
   const BenchData& d = Data();
   SplineCalibratorOptions options;
@@ -90,6 +91,7 @@ void BM_Calibrate(benchmark::State& state) {
   options.compress_inertial = state.range(3) >= 0;
   options.inertial_block_segments = static_cast<int>(std::max<std::int64_t>(0, state.range(3)));
   options.stacked_inertial_segments = static_cast<int>(state.range(4));
+  options.robust_early_stop = state.range(5) != 0;
   SplineCalibrationResult result;
   for (auto _ : state) {
     result = CalibrateSpline(d.rig, d.data, options, BenchLog());
@@ -104,16 +106,17 @@ void BM_Calibrate(benchmark::State& state) {
   state.counters["knots"] = result.num_knots;
 }
 BENCHMARK(BM_Calibrate)
-    ->ArgNames({"threads", "per_frame", "analytic", "inertial_K", "stacked"})
-    ->Args({2, 1, 1, 0, 1})
-    ->Args({2, 1, 1, 0, 0})
-    ->Args({2, 1, 1, 0, 2})
-    ->Args({2, 1, 1, 1, 1})
-    ->Args({2, 1, 1, 4, 1})
-    ->Args({1, 1, 1, 0, 1})
-    ->Args({2, 0, 1, 0, 1})
-    ->Args({1, 0, 1, 0, 1})
-    ->Args({2, 0, 0, 0, 1})
+    ->ArgNames({"threads", "per_frame", "analytic", "inertial_K", "stacked", "robust_stop"})
+    ->Args({2, 1, 1, 0, 1, 1})
+    ->Args({2, 1, 1, 0, 0, 0})
+    ->Args({2, 1, 1, 0, 1, 0})
+    ->Args({2, 1, 1, 0, 2, 1})
+    ->Args({2, 1, 1, 1, 1, 1})
+    ->Args({2, 1, 1, 4, 1, 1})
+    ->Args({1, 1, 1, 0, 1, 1})
+    ->Args({2, 0, 1, 0, 1, 1})
+    ->Args({1, 0, 1, 0, 1, 1})
+    ->Args({2, 0, 0, 0, 1, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()

@@ -113,6 +113,32 @@ TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate
               fast.iterations, ref.iterations, a.worst);
 }
 
+// docs/performance.md step 7b's speed-ups (stacked inertial blocks at the 200-300 Hz rates, the
+// robust solve's predicted stop) against the pipeline without them: the same corners gated out
+// and every estimate within 0.01 sigma (the stacked blocks hold the per-sample rows to the bit;
+// the robust solve ends at the point Ceres' function tolerance would have kept).
+TEST(SplineCalibrator, SpeedUpsKeepTheOutliersAndTheEstimates) {
+  const test::Recording l = test::LoadRecording(SimulatedData(11, 12.0));
+  SplineCalibratorOptions options;
+  options.threads = 2;
+  options.report_data = false;
+  SplineCalibratorOptions before = options;
+  before.stacked_inertial_segments = 0;
+  before.robust_early_stop = false;
+  const SplineCalibrationResult fast = CalibrateSpline(l.rig, l.data, options, Quiet());
+  const SplineCalibrationResult ref = CalibrateSpline(l.rig, l.data, before, Quiet());
+  ASSERT_EQ(fast.outliers.size(), ref.outliers.size());
+  for (std::size_t i = 0; i < ref.outliers.size(); ++i) {
+    EXPECT_EQ(fast.outliers[i].corners, ref.outliers[i].corners) << ref.outliers[i].camera;
+    EXPECT_EQ(fast.outliers[i].removed, ref.outliers[i].removed) << ref.outliers[i].camera;
+  }
+  EXPECT_LE(fast.iterations, ref.iterations);
+  const Agreement a = ExpectAgreement(ref.result, fast.result, 0.01);
+  EXPECT_GE(a.compared, 95);
+  std::printf("speed-ups: %d vs %d iterations, worst |fast - before| %.2e sigma\n", fast.iterations,
+              ref.iterations, a.worst);
+}
+
 TEST(SplineCalibrator, CameraThatNeverSeesTheBoardIsNamed) {
   test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
   l.data["cam1"].corners.clear();

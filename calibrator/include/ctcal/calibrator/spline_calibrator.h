@@ -77,6 +77,10 @@ struct SplineCalibratorOptions {
   // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. 0: Ceres'
   // relative tolerances of 1e-10 alone (the fully converged reference).
   double stop_cost_change = 0.005;
+  // The robust solve stops once the next step is predicted to lower the cost by < 1e-4 of it
+  // (spline_problem_impl.h RobustStageStop) instead of computing that step; false: Ceres'
+  // relative function tolerance of 1e-6 alone.
+  bool robust_early_stop = true;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.
