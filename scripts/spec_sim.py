@@ -7,14 +7,15 @@ offset's sign, T_B_S against T_S_B, an IMU model's order of operations, gravity'
 distortion's parameter order, a quaternion's order, the rolling-shutter row time, a CSV unit) shows
 up as a calibration that misses the truth. Python 3 standard library only.
 
-Writes DATA/<sensor>/data.csv (inertial), DATA/<camera>/corners.csv, DATA/<sensor>/biases.csv,
+Writes DATA/<sensor>/data.csv (inertial), DATA/<camera>/corners.csv (or, with --images, the
+camera's images and data.csv, rendered by scripts/spec_render.py), DATA/<sensor>/biases.csv,
 DATA/groundtruth/data.csv, DATA/truth.yaml and DATA/rig.yaml (a coarse, hand-made guess: focal
 lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centimetres off, time
 offsets 0, IMU intrinsics at their defaults).
 
     python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--aux-model imu2]
-        [--gyro-model upper] [--target aprilgrid|checkerboard] [--rolling-shutter]
-        [--max-offset-ms 10]
+        [--gyro-model upper] [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
+        [--max-offset-ms 10] [--cam-rate 20] [--images] [--image-scale 1]
 """
 
 import argparse
@@ -256,26 +257,37 @@ def checkerboard(cols, rows, row_spacing, col_spacing):
 # parameter orders.
 
 
+def radtan(k, x, y):
+    """Kalibr's radtan [k1, k2, r1, r2] (OpenCV's p1, p2) of the normalised point (x, y). Plain
+    arithmetic, so that spec_render.py applies it to numpy arrays."""
+    k1, k2, r1, r2 = k
+    rr = x * x + y * y
+    radial = 1.0 + k1 * rr + k2 * rr * rr
+    return (x * radial + 2.0 * r1 * x * y + r2 * (rr + 2.0 * x * x),
+            y * radial + r1 * (rr + 2.0 * y * y) + 2.0 * r2 * x * y)
+
+
+def kannala_brandt(k, th):
+    """Kalibr's equidistant [k1..k4]: theta_d = theta (1 + k1 theta^2 + ... + k4 theta^8) of the
+    angle theta off the optical axis (plain arithmetic, as radtan)."""
+    th2 = th * th
+    return th * (1.0 + th2 * (k[0] + th2 * (k[1] + th2 * (k[2] + th2 * k[3]))))
+
+
 def project(cam, p_C):
     if p_C[2] < 0.05:
         return None
     x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
     k = cam["distortion_coeffs"]
     if cam["distortion_model"] == "radtan":
-        k1, k2, r1, r2 = k
-        rr = x * x + y * y
-        radial = 1.0 + k1 * rr + k2 * rr * rr
-        xd = x * radial + 2.0 * r1 * x * y + r2 * (rr + 2.0 * x * x)
-        yd = y * radial + r1 * (rr + 2.0 * y * y) + 2.0 * r2 * x * y
+        xd, yd = radtan(k, x, y)
     elif cam["distortion_model"] == "equidistant":
         r = math.sqrt(x * x + y * y)
         if r < 1e-12:
             xd, yd = x, y
         else:
-            th = math.atan(r)
-            th2 = th * th
-            thd = th * (1.0 + k[0] * th2 + k[1] * th2 ** 2 + k[2] * th2 ** 3 + k[3] * th2 ** 4)
-            xd, yd = x * thd / r, y * thd / r
+            s = kannala_brandt(k, math.atan(r)) / r
+            xd, yd = x * s, y * s
     else:
         xd, yd = x, y
     fu, fv, pu, pv = cam["intrinsics"]
@@ -412,6 +424,12 @@ def body_state(traj, t):
     return p, v, acc, R, w, alpha
 
 
+def camera_pose(traj, R_B_C, t_B_C, t):
+    """R_W_C, p_W_C at base time t."""
+    p, _, _, R, _, _ = body_state(traj, t)
+    return mm(R, R_B_C), add(p, mv(R, t_B_C))
+
+
 # --------------------------------------------------------------------------------------------
 # The rig: the truth of every sensor, in the order the files list them (not ours: cameras first,
 # the base last).
@@ -425,6 +443,9 @@ def make_target(kind):
     if kind == "aprilgrid":
         return ({"target_type": "aprilgrid", "tagCols": 7, "tagRows": 5, "tagSize": 0.06,
                  "tagSpacing": 0.25},) + aprilgrid(7, 5, 0.06, 0.25)
+    if kind == "kalibr-aprilgrid":  # the board Kalibr offers for download (its wiki's example)
+        return ({"target_type": "aprilgrid", "tagCols": 6, "tagRows": 6, "tagSize": 0.088,
+                 "tagSpacing": 0.3},) + aprilgrid(6, 6, 0.088, 0.3)
     return ({"target_type": "checkerboard", "targetCols": 7, "targetRows": 6,
              "rowSpacingMeters": 0.07, "colSpacingMeters": 0.06},) + checkerboard(7, 6, 0.07, 0.06)
 
@@ -557,22 +578,19 @@ def write_inertial(out, name, s, traj, g_W, t0_ns, duration, rng, groundtruth):
 
 
 def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, rng,
-                  per_corner_sigma):
-    """DATA/<name>/corners.csv; returns (frames, corners, image cells of a 4x4 grid covered)."""
-    os.makedirs(os.path.join(out, name), exist_ok=True)
+                  per_corner_sigma, folder=None):
+    """DATA/<name>/corners.csv (or <folder>/corners.csv with the exact projections: the truth of
+    rendered images); returns (frames, corners, image cells of a 4x4 grid covered)."""
+    folder = folder or os.path.join(out, name)
+    exact = folder != os.path.join(out, name)
+    os.makedirs(folder, exist_ok=True)
     R_B_C, t_B_C = rotation_translation(cam["T_B_S"])
     width, height = cam["resolution"]
     ld = cam.get("line_delay", 0.0)
     lines, frames, n, cells = [], 0, 0, set()
-
-    def camera_pose(t):
-        """R_W_C, p_W_C at base time t."""
-        p, _, _, R, _, _ = body_state(traj, t)
-        return mm(R, R_B_C), add(p, mv(R, t_B_C))
-
     for st in stamps(t0_ns + 25000000, duration - 0.05, rate):
         t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
-        pose_at_stamp = camera_pose(t_img)
+        pose_at_stamp = camera_pose(traj, R_B_C, t_B_C, t_img)
         frame = []
         for group in groups:
             seen = []
@@ -585,7 +603,7 @@ def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, r
                     if uv is None:
                         break
                     v_row = uv[1]
-                    R_W_C, p_W_C = camera_pose(t_img + v_row * ld)
+                    R_W_C, p_W_C = camera_pose(traj, R_B_C, t_B_C, t_img + v_row * ld)
                     uv = project(cam, mtv(R_W_C, sub(points[cid], p_W_C)))
                     if uv is not None and abs(uv[1] - v_row) < 1e-6:
                         break
@@ -601,7 +619,9 @@ def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, r
         n += len(frame)
         for cid, (u, v) in frame:
             cells.add((int(4 * u / width), int(4 * v / height)))
-            if per_corner_sigma:
+            if exact:
+                lines.append("%d,%d,%.6f,%.6f\n" % (st, cid, u, v))
+            elif per_corner_sigma:
                 s = rng.choice([0.3, 0.5, 0.8])
                 lines.append("%d,%d,%.4f,%.4f,%.2f\n" % (st, cid, u + rng.gauss(0.0, s),
                                                          v + rng.gauss(0.0, s), s))
@@ -609,11 +629,23 @@ def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, r
                 s = cam["noise"]["pixel_sigma"]
                 lines.append("%d,%d,%.4f,%.4f\n" % (st, cid, u + rng.gauss(0.0, s),
                                                     v + rng.gauss(0.0, s)))
-    with open(os.path.join(out, name, "corners.csv"), "w") as f:
+    with open(os.path.join(folder, "corners.csv"), "w") as f:
         f.write("#timestamp [ns],corner_id,u [px],v [px]" +
                 (",sigma [px]\n" if per_corner_sigma else "\n"))
         f.writelines(lines)
     return frames, n, len(cells)
+
+
+def scale_camera(cam, s):
+    """The same lens on a sensor with s times the pixels per side, the same readout time. SPEC 4's
+    pixel (0, 0) is the centre of the top-left pixel, so the image's edge is at -0.5."""
+    if s == 1.0:
+        return
+    fu, fv, pu, pv = cam["intrinsics"]
+    cam["intrinsics"] = [fu * s, fv * s, (pu + 0.5) * s - 0.5, (pv + 0.5) * s - 0.5]
+    cam["resolution"] = [int(round(n * s)) for n in cam["resolution"]]
+    if "line_delay" in cam:
+        cam["line_delay"] /= s
 
 
 def coarse_guess(truth, rng):
@@ -655,12 +687,34 @@ def main():
     ap.add_argument("--duration", type=float, default=18.0)
     ap.add_argument("--aux-model", default="imu2", choices=["none", "imu1", "imu2", "imu3", "imu4"])
     ap.add_argument("--gyro-model", default="upper", choices=["none", "upper", "full"])
-    ap.add_argument("--target", default="aprilgrid", choices=["aprilgrid", "checkerboard"])
+    ap.add_argument("--target", default="aprilgrid",
+                    choices=["aprilgrid", "kalibr-aprilgrid", "checkerboard"],
+                    help="aprilgrid: 7x5 tags of 6 cm; kalibr-aprilgrid: 6x6 of 8.8 cm")
     ap.add_argument("--rolling-shutter", action="store_true",
                     help="the fisheye reads its rows 25 us apart")
     ap.add_argument("--max-offset-ms", type=float, default=10.0)
     ap.add_argument("--cam-rate", type=float, default=20.0)
+    ap.add_argument("--images", action="store_true",
+                    help="write the cameras' images (scripts/spec_render.py; needs numpy and "
+                    "OpenCV: /usr/bin/python3) instead of corners.csv; AprilGrid only")
+    ap.add_argument("--image-scale", type=float, default=1.0,
+                    help="scale the cameras' resolution and intrinsics (0.5: half-size images)")
     args = ap.parse_args()
+    if args.images and args.target == "checkerboard":
+        # SPEC 5 numbers a checkerboard's corners but does not fix which printed corner is the
+        # first (a detector's choice under the board's 180 deg symmetry).
+        ap.error("--images renders an AprilGrid only")
+    render = None
+    if args.images:
+        sys.modules.setdefault("spec_sim", sys.modules[__name__])  # spec_render uses this module
+        sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+        try:
+            import spec_render as render
+        except ImportError as e:
+            print("spec_sim: --images needs numpy and OpenCV (Debian's python3-numpy, "
+                  "python3-opencv; run /usr/bin/python3): %s" % e, file=sys.stderr)
+            return 2
+        tag_check = render.check_tag_bits()
     wall = time.time()
     rng = random.Random(args.seed)
     out = args.out
@@ -672,15 +726,21 @@ def main():
     xs = [p[0] for p in points.values()]
     ys = [p[1] for p in points.values()]
     centre = [0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)), 0.0]
-    # The board hangs on a tilted wall: gravity mostly along the board's +y (its rows go down).
-    gdir = [rng.uniform(-0.2, 0.2), 1.0, rng.uniform(-0.3, 0.3)]
+    # The board hangs on a tilted wall: gravity mostly along the board's +y (its rows go down); a
+    # printed board seen from its printed side has y up (Kalibr's print), gravity along -y.
+    gdir = [rng.uniform(-0.2, 0.2), -1.0 if args.images else 1.0, rng.uniform(-0.3, 0.3)]
     g_W = scale(g_mag / norm(gdir), gdir)
     truth, R_B_L, t_B_L = make_rig(rng, args)
+    for name in (CAM_L, CAM_R):
+        scale_camera(truth[name], args.image_scale)
 
-    # The motion: the left camera looks at the board's centre from 0.75 m in front (the board's
-    # -z side, so that the board's x and y read as the image's u and v).
-    R_W_B0 = tr(R_B_L)
-    p_W_B0 = sub([centre[0], centre[1], -0.75], mv(R_W_B0, t_B_L))
+    # The motion: the left camera looks at the board's centre from 0.75 m in front: from the
+    # board's -z side for corners, so that the board's x and y read as the image's u and v; from
+    # its +z side for images, where the print is (x right, y up, z toward the viewer), upright:
+    # x_C = x_W, y_C = -y_W.
+    R_W_C0 = rot_x(math.pi) if args.images else eye()
+    R_W_B0 = mm(R_W_C0, tr(R_B_L))
+    p_W_B0 = sub([centre[0], centre[1], 0.75 if args.images else -0.75], mv(R_W_B0, t_B_L))
     traj = Trajectory(rng, p_W_B0, R_W_B0, pos_amp=0.22, rot_amp=0.45)
     self_check(traj)
 
@@ -688,9 +748,16 @@ def main():
         write_inertial(out, name, truth[name], traj, g_W, t0_ns, args.duration, rng,
                        groundtruth=name == BASE)
     stats = {}
-    for name in (CAM_L, CAM_R):  # the left camera writes the optional sigma column
-        stats[name] = write_corners(out, name, truth[name], traj, points, groups, t0_ns,
-                                    args.duration, args.cam_rate, rng, name == CAM_L)
+    for i, name in enumerate((CAM_L, CAM_R)):  # the left camera writes the optional sigma column
+        if render:
+            stats[name] = render.write_images(out, name, truth[name], traj, target, t0_ns,
+                                              args.duration, args.cam_rate, args.seed * 10 + i)
+            # The corners the images show, for a look at the detector alone (not a SPEC file).
+            write_corners(out, name, truth[name], traj, points, groups, t0_ns, args.duration,
+                          args.cam_rate, None, False, os.path.join(out, "groundtruth", name))
+        else:
+            stats[name] = write_corners(out, name, truth[name], traj, points, groups, t0_ns,
+                                        args.duration, args.cam_rate, rng, name == CAM_L)
 
     write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
               BASE, g_mag, target, truth, gravity_W=g_W)
@@ -698,11 +765,14 @@ def main():
               "coarse hand-made guess written by scripts/spec_sim.py", BASE, g_mag, target,
               coarse_guess(truth, rng))
 
-    cameras = ", ".join("%s %d frames %d corners %d/16 image cells" % ((k,) + v)
-                        for k, v in stats.items())
-    print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s; %s; %.1f s" % (
+    form = ("%s %d images (%d with a whole tag), %.1f s" if render else
+            "%s %d frames %d corners %d/16 image cells")
+    cameras = ", ".join(form % ((k,) + v) for k, v in stats.items())
+    print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s%s; %s; %.1f s" % (
         out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
-        ", rolling shutter" if args.rolling_shutter else "", cameras, time.time() - wall))
+        ", rolling shutter" if args.rolling_shutter else "",
+        ", images (tag bits checked against %s)" % tag_check if render else "", cameras,
+        time.time() - wall))
     return 0
 
 

@@ -235,6 +235,20 @@ bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vecto
   return true;
 }
 
+// The first of fu, fv that `camera` moved beyond `max_ratio` of `guess` (its index), or -1.
+int FocalBeyondRatio(const CameraModel& camera, const CameraModel& guess, double max_ratio) {
+  const std::vector<std::string> names = guess.ParamNames();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] != "fu" && names[i] != "fv")
+      continue;
+    const double ratio =
+        camera.params()[static_cast<long>(i)] / guess.params()[static_cast<long>(i)];
+    if (!(ratio > 1.0 / max_ratio && ratio < max_ratio))
+      return static_cast<int>(i);
+  }
+  return -1;
+}
+
 }  // namespace
 
 IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const CameraModel& guess,
@@ -322,10 +336,24 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   }
 
   // c. Projection parameters first (distortion held at the guess), then everything, then
-  // everything without the outliers.
+  // everything without the outliers. A lens far from the guess's distortion (a zero guess of
+  // radtan k1 -0.28) can have no plausible distortion-free fit: the held stage then walks towards
+  // an orthographic camera (fu 392 -> 5 px on scripts/spec_sim.py --images --target aprilgrid
+  // --seed 7, whose views determine fu to 0.03 px) and the full refinement starts from the
+  // guess instead.
   std::vector<char> keep(refs.size(), 1);
-  if (!Refine(&camera, &views, refs, keep, false, options) ||
-      (options.estimate_distortion && !Refine(&camera, &views, refs, keep, true, options)))
+  CameraModel held = camera;
+  std::vector<ViewState> held_views = views;
+  if (!Refine(&held, &held_views, refs, keep, false, options))
+    throw InitError(kStage, camera_name, "the refinement of the intrinsics failed");
+  if (!options.estimate_distortion || FocalBeyondRatio(held, guess, options.max_focal_ratio) < 0) {
+    camera = held;
+    views = std::move(held_views);
+  } else {
+    factor_note += Format(", the distortion-free fit left x%.2f of the focal guess: not used",
+                          options.max_focal_ratio);
+  }
+  if (options.estimate_distortion && !Refine(&camera, &views, refs, keep, true, options))
     throw InitError(kStage, camera_name, "the refinement of the intrinsics failed");
   const std::vector<double> errors = ReprojectionErrors(camera, views, refs);
   std::vector<double> finite;
@@ -346,19 +374,13 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   // Views that are all nearly fronto-parallel (or alike) leave focal length and board depth
   // trading freely: the refinement then walks far from any plausible focal length (towards an
   // orthographic camera), which the guess (within ~20 %) rules out.
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] != "fu" && names[i] != "fv")
-      continue;
-    const double ratio =
-        camera.params()[static_cast<long>(i)] / guess.params()[static_cast<long>(i)];
-    if (!(ratio > 1.0 / options.max_focal_ratio && ratio < options.max_focal_ratio))
-      throw InitError(kStage, camera_name,
-                      Format("the board views do not determine the focal length: the refinement "
-                             "moved %s from %.1f to %.4g px (views nearly fronto-parallel or "
-                             "alike: tilt the board relative to the camera)",
-                             names[i].c_str(), guess.params()[static_cast<long>(i)],
-                             camera.params()[static_cast<long>(i)]));
-  }
+  if (const int i = FocalBeyondRatio(camera, guess, options.max_focal_ratio); i >= 0)
+    throw InitError(
+        kStage, camera_name,
+        Format("the board views do not determine the focal length: the refinement "
+               "moved %s from %.1f to %.4g px (views nearly fronto-parallel or "
+               "alike: tilt the board relative to the camera)",
+               names[static_cast<std::size_t>(i)].c_str(), guess.params()[i], camera.params()[i]));
   result.rms_px = Rms(ReprojectionErrors(camera, views, refs), &keep);
   result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
   result.views = static_cast<int>(views.size());

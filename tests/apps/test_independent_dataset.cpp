@@ -4,7 +4,10 @@
 // script's truth. Our own simulator and calibrator share their conventions, so a convention both
 // get wrong (an offset's sign, T_B_S against T_S_B, an IMU model's order of operations, gravity's
 // sign, a distortion's parameter order, a CSV column's unit) passes every other test; here it
-// cannot.
+// cannot. With --images the script renders the cameras' views of a printed Kalibr AprilGrid
+// (scripts/spec_render.py, written from SPEC and Kalibr's board generator, not from ctcal's
+// renderer or detector) and ctcal detects the corners itself: the same holds for the pixel centre,
+// the tag bits' order, the corner ids, the board's axes and image names and stamps.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -13,11 +16,13 @@
 #include <algorithm>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../calibrator/issue7_tolerances.h"
@@ -30,18 +35,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool HavePython() {
-  return std::system("python3 -c 'import math' > /dev/null 2>&1") == 0;
+bool HavePython(const std::string& python, const std::string& modules) {
+  return std::system((python + " -c 'import " + modules + "' > /dev/null 2>&1").c_str()) == 0;
 }
 
 // Writes the dataset with `args` and calibrates it from its rig.yaml into DATA_out; returns DATA.
-fs::path GenerateAndCalibrate(const std::string& stem, const std::string& args) {
+fs::path GenerateAndCalibrate(const std::string& stem, const std::string& args,
+                              const std::string& python) {
   const fs::path data =
       fs::path(::testing::TempDir()) / ("ctcal_indep_" + stem + "_" + std::to_string(::getpid()));
   const fs::path out = data.string() + "_out";
   fs::remove_all(data);
   fs::remove_all(out);
-  const std::string gen = "python3 " + std::string(CTCAL_SOURCE_DIR) +
+  const std::string gen = python + " " + std::string(CTCAL_SOURCE_DIR) +
                           "/scripts/spec_sim.py --out " + data.string() + " " + args + " > " +
                           data.string() + "_sim.log 2>&1";
   EXPECT_EQ(std::system(gen.c_str()), 0) << gen << " (see " << data << "_sim.log)";
@@ -277,10 +283,80 @@ void ExpectTrajectory(const fs::path& data, const fs::path& out) {
   EXPECT_LT(worst_deg, 0.2);
 }
 
-void CheckCalibration(const std::string& stem, const std::string& args) {
-  if (!HavePython())
+// Every corner ctcal detected in the rendered images against the script's exact projection of it
+// (DATA/groundtruth/<camera>/corners.csv, not a SPEC file): a wrong corner id (a tag's corners
+// turned, a mirrored board) would be off by a tag's size, a pixel-centre convention by 0.5 px, a
+// wrong row time by the image motion. Bounds: the detector's scatter (0.04-0.06 px RMS here) and
+// bias (<= 0.006 px) with a margin. A corner a few pixels from the image's edge, whose
+// neighbourhood the edge cuts, may be refined up to a few pixels off (seed 7: one of 10276, 3.6 px,
+// 7.7 px from the top edge; a detector matter, reported): at most 1 in 1000, and only there.
+// Returns the corners' RMS error over the RMS of the sigmas the detector gave them (1: honest).
+double ExpectDetectionsMatchTheRendering(const fs::path& data, const fs::path& out,
+                                         const SensorConfig& cam, int num_corners) {
+  const std::vector<CornerObservation> truth =
+      ReadCornersCsv((data / "groundtruth" / cam.name / "corners.csv").string(), num_corners);
+  const std::vector<CornerObservation> found =
+      ReadCornersCsv((out / cam.name / "corners.csv").string(), num_corners);
+  std::map<std::pair<std::int64_t, int>, Eigen::Vector2d> exact;
+  for (const CornerObservation& c : truth)
+    exact[{c.t_ns, c.corner_id}] = Eigen::Vector2d(c.u, c.v);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  double sum_sq = 0.0, sigma_sq = 0.0;
+  int matched = 0, far_off = 0;
+  for (const CornerObservation& c : found) {
+    const auto it = exact.find({c.t_ns, c.corner_id});
+    if (it == exact.end())
+      continue;  // the script leaves out corners within 5 cm of a camera's plane
+    const Eigen::Vector2d e = Eigen::Vector2d(c.u, c.v) - it->second;
+    ++matched;
+    if (e.norm() > 1.0) {
+      const Eigen::Vector2d& p = it->second;
+      const double to_edge =
+          std::min({p.x(), p.y(), cam.width - 1.0 - p.x(), cam.height - 1.0 - p.y()});
+      std::printf("  %-8s corner %d at %lld: %.2f px off, %.1f px from the image's edge\n",
+                  cam.name.c_str(), c.corner_id, static_cast<long long>(c.t_ns), e.norm(), to_edge);
+      EXPECT_LT(to_edge, 12.0) << cam.name << " corner " << c.corner_id << " at " << c.t_ns;
+      ++far_off;
+      continue;
+    }
+    sum += e;
+    sum_sq += e.squaredNorm();
+    sigma_sq += std::pow(c.sigma.value_or(cam.pixel_sigma), 2);
+  }
+  EXPECT_GT(matched, static_cast<int>(truth.size()) / 3) << cam.name;
+  EXPECT_GT(matched, static_cast<int>(found.size()) * 9 / 10) << cam.name;
+  if (matched - far_off < 100) {
+    ADD_FAILURE() << cam.name << ": " << matched << " corners matched";
+    return 1.0;
+  }
+  const Eigen::Vector2d mean = sum / (matched - far_off);
+  const double rms = std::sqrt(sum_sq / (2.0 * (matched - far_off)));
+  const double sigma_rms = std::sqrt(sigma_sq / (matched - far_off));
+  std::printf(
+      "  %-8s %d of %d rendered corners detected, error mean (%+.4f, %+.4f) px, "
+      "RMS %.4f px per axis (the detector's sigma: %.4f px), %d beyond 1 px\n",
+      cam.name.c_str(), matched, static_cast<int>(truth.size()), mean.x(), mean.y(), rms, sigma_rms,
+      far_off);
+  EXPECT_LT(mean.norm(), 0.02) << cam.name;
+  EXPECT_LT(rms, 0.1) << cam.name;
+  EXPECT_LE(far_off * 1000, matched) << cam.name;
+  return rms / sigma_rms;
+}
+
+struct CheckOptions {
+  std::string python = "python3";
+  bool images = false;  // ctcal detects the corners in the script's images
+  issue7::Issue7Tolerances tolerances;
+};
+
+void CheckCalibration(const std::string& stem, const std::string& args,
+                      const CheckOptions& options = {}) {
+  if (options.images && !HavePython(options.python, "numpy, cv2"))
+    GTEST_SKIP() << options.python << " lacks numpy or cv2 (Debian's python3-numpy, "
+                 << "python3-opencv): scripts/spec_render.py cannot render the images";
+  if (!HavePython(options.python, "math"))
     GTEST_SKIP() << "python3 is absent: scripts/spec_sim.py cannot write the dataset";
-  const fs::path data = GenerateAndCalibrate(stem, args);
+  const fs::path data = GenerateAndCalibrate(stem, args, options.python);
   if (::testing::Test::HasFailure())
     return;
   std::vector<std::string> warnings;
@@ -288,10 +364,28 @@ void CheckCalibration(const std::string& stem, const std::string& args) {
   const RigConfig guess = LoadRig((data / "rig.yaml").string(), &warnings);
   const RigConfig result = LoadRig(data.string() + "_out/result.yaml", &warnings);
   ExpectCoarseGuess(truth, guess);
+  issue7::Issue7Tolerances tolerances = options.tolerances;
+  if (options.images) {
+    // The sigmas rest on the detector's corner sigmas; where those understate the corners' true
+    // scatter (measured here against the rendering), an estimate within 4 of its sigma is
+    // checked against the sigma scaled by that ratio (docs/initialisation.md, "Rendered by the
+    // independent program"). An honest detector gives ratio 1, the plain check.
+    double understated = 1.0;
+    for (const SensorConfig& s : truth.sensors) {
+      if (s.type != SensorType::kCamera)
+        continue;
+      EXPECT_FALSE(fs::exists(data / s.name / "corners.csv")) << s.name << ": images only";
+      understated =
+          std::max(understated, ExpectDetectionsMatchTheRendering(data, data.string() + "_out", s,
+                                                                  TargetCornerCount(truth.target)));
+    }
+    tolerances.max_sigmas *= understated;
+    std::printf("  estimates checked within %.2f sigma\n", tolerances.max_sigmas);
+  }
   // The recording is designed to determine everything (the fisheye sweeps its outer field), so no
   // scalar may be left without a finite sigma.
-  const issue7::ToleranceReport r =
-      issue7::ExpectWithinTolerances(truth, result, [](const std::string&) { return false; });
+  const issue7::ToleranceReport r = issue7::ExpectWithinTolerances(
+      truth, result, [](const std::string&) { return false; }, tolerances);
   ExpectKalibrFiles(truth, YAML::LoadFile((data / "truth.yaml").string()), data.string() + "_out");
   ExpectTrajectory(data, data.string() + "_out");
   std::printf(
@@ -318,6 +412,20 @@ TEST(IndependentDataset, CheckerboardRollingShutterImu4LargeOffsets) {
   CheckCalibration("variant",
                    "--seed 6 --duration 20 --aux-model imu4 --target checkerboard "
                    "--rolling-shutter --max-offset-ms 50");
+}
+
+// Images only, detection included (issue 7: "Kalibr-style rendered images only": rotations 0.05
+// deg, 3 mm, 0.3 ms, 1 px): the default rig's radtan and equidistant cameras render Kalibr's 6x6
+// AprilGrid; no corners.csv, ctcal detects the corners, from the coarse guess. 8 s at 10 Hz (160
+// images) to stay well within a minute of CPU, rendering and detection included (21 s): the
+// auxiliary IMU's rotation is then the tightest (0.038 deg; seeds 8-10: docs/initialisation.md).
+TEST(IndependentDataset, RenderedImagesOnlyMeetTheIssueBar) {
+  CheckOptions options;
+  options.python = "/usr/bin/python3";  // Debian's, with numpy and cv2 (not a pyenv on PATH)
+  options.images = true;
+  options.tolerances.time_offset_s = 0.3e-3;
+  CheckCalibration(
+      "images", "--images --target kalibr-aprilgrid --seed 7 --duration 8 --cam-rate 10", options);
 }
 
 }  // namespace
