@@ -54,8 +54,9 @@ struct SplineCalibratorOptions {
   bool compress_frames = true;
   // Inertial samples as one compressed block per sensor and run of spline segments (analytic path
   // only; inertial_block_residual.h) where that at least halves Ceres' J^T J work (1 kHz IMUs, not
-  // the 200-300 Hz sensors of the demo); false: one block per sample. inertial_block_segments > 0
-  // forces that run length on every inertial sensor (benchmarks and tests).
+  // the 200-300 Hz sensors of the demo); false: one block per sample everywhere (no stacked
+  // blocks either). inertial_block_segments > 0 forces that run length on every inertial sensor
+  // (benchmarks and tests).
   bool compress_inertial = true;
   int inertial_block_segments = 0;
   // Where the compression does not pay (the demo's rates), the samples of a run of
