@@ -271,8 +271,8 @@ int RunCalibrate(int argc, char** argv) {
   }
 
   SplineCalibrationResult result;
-  if (const auto failed =
-          Guarded(cli, log_file, [&] { result = CalibrateSpline(rig, data, options, log); }))
+  if (const auto failed = Guarded(
+          cli, log_file, [&] { result = CalibrateSpline(rig, std::move(data), options, log); }))
     return *failed;
 
   try {

@@ -8,9 +8,12 @@
 //
 // Data: CTCAL_BENCH_DATA=<folder written by `ctcal simulate`> (e.g. the demo's 60 s rig), else
 // a `full` scenario of CTCAL_BENCH_DURATION seconds (default 20, seed 2024, table4 guesses) is
-// simulated into a temporary folder first. Peak memory is measured on the command line instead
-// (`/usr/bin/time -v ctcal calibrate ...`, docs/performance.md).
+// simulated into a temporary folder first. BM_LongRecordingMemory: peak memory and CPU of 10 min of
+// 1 kHz IMU and 2 cameras (run it alone; docs/performance.md, step 7).
 #include <benchmark/benchmark.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -22,6 +25,7 @@
 #include <string>
 
 #include "ctcal/calibrator/discrete_calibrator.h"
+#include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -40,6 +44,22 @@ struct BenchData {
   std::map<std::string, SensorData> data;
 };
 
+// `ctcal simulate --rig <truth> --scenario full --seed <seed> --duration <duration> --perturb
+// table4 --out <dir>`.
+void SimulateInto(const std::string& dir, const RigConfig& truth, double duration, int seed) {
+  std::filesystem::remove_all(dir);
+  const auto motion = sim::MakeTrajectory(sim::Scenario::kFull, sim::SceneFor(truth.target));
+  const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(truth));
+  sim::SimOptions options;
+  options.duration = duration;
+  options.seed = static_cast<std::uint64_t>(seed);
+  const sim::SimulatedDataset sim_data = sim::Simulate(truth, traj, options);
+  sim::Random rng = sim::Random(static_cast<std::uint64_t>(seed)).Fork(sim::kPerturbationStream);
+  sim::WriteDataset(sim_data, sim::PerturbRig(truth, sim::Perturbation::kTable4, rng), dir,
+                    sim::WriteOptions());
+  std::fprintf(stderr, "bench_calibrate: simulated %.0f s into %s\n", duration, dir.c_str());
+}
+
 const BenchData& Data() {
   static const std::unique_ptr<BenchData> data = [] {
     std::string dir;
@@ -47,20 +67,8 @@ const BenchData& Data() {
       dir = env;
     } else {
       const char* d = std::getenv("CTCAL_BENCH_DURATION");
-      const double duration = d != nullptr ? std::atof(d) : 20.0;
       dir = (std::filesystem::temp_directory_path() / "ctcal_bench_calibrate").string();
-      std::filesystem::remove_all(dir);
-      const RigConfig truth = sim::DefaultRig();
-      const auto motion = sim::MakeTrajectory(sim::Scenario::kFull, sim::SceneFor(truth.target));
-      const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(truth));
-      sim::SimOptions options;
-      options.duration = duration;
-      options.seed = 2024;
-      const sim::SimulatedDataset sim_data = sim::Simulate(truth, traj, options);
-      sim::Random rng = sim::Random(2024).Fork(0x9e7);
-      sim::WriteDataset(sim_data, sim::PerturbRig(truth, sim::Perturbation::kTable4, rng), dir,
-                        sim::WriteOptions());
-      std::fprintf(stderr, "bench_calibrate: simulated %.0f s into %s\n", duration, dir.c_str());
+      SimulateInto(dir, sim::DefaultRig(), d != nullptr ? std::atof(d) : 20.0, 2024);
     }
     auto out = std::make_unique<BenchData>();
     out->rig = LoadRig(dir + "/rig.yaml");
@@ -75,6 +83,17 @@ CalibrationLog BenchLog() {
   if (std::getenv("CTCAL_BENCH_LOG") == nullptr)
     return [](const std::string&) {};
   return [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+}
+
+// The run's LM iterations, stage times (wall) and knots as counters.
+void SetRunCounters(const SplineCalibrationResult& result, benchmark::State* state) {
+  state->counters["iterations"] = result.iterations;
+  state->counters["s_per_iteration"] = result.seconds_per_iteration;
+  state->counters["init_s"] = result.init_seconds;
+  state->counters["solve_s"] = result.solve_seconds;
+  state->counters["covariance_s"] = result.covariance_seconds;
+  state->counters["total_s"] = result.total_seconds;
+  state->counters["knots"] = result.num_knots;
 }
 
 // args: threads, compressed (0/1), analytic (0/1), inertial run length K (0: the sensor-rate
@@ -97,13 +116,7 @@ void BM_Calibrate(benchmark::State& state) {
     result = CalibrateSpline(d.rig, d.data, options, BenchLog());
     benchmark::DoNotOptimize(result.result.solver);
   }
-  state.counters["iterations"] = result.iterations;
-  state.counters["s_per_iteration"] = result.seconds_per_iteration;
-  state.counters["init_s"] = result.init_seconds;
-  state.counters["solve_s"] = result.solve_seconds;
-  state.counters["covariance_s"] = result.covariance_seconds;
-  state.counters["total_s"] = result.total_seconds;
-  state.counters["knots"] = result.num_knots;
+  SetRunCounters(result, &state);
 }
 BENCHMARK(BM_Calibrate)
     ->ArgNames({"threads", "per_frame", "analytic", "inertial_K", "stacked", "robust_stop"})
@@ -117,6 +130,60 @@ BENCHMARK(BM_Calibrate)
     ->Args({2, 0, 1, 0, 1, 1})
     ->Args({1, 0, 1, 0, 1, 1})
     ->Args({2, 0, 0, 0, 1, 1})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+// Peak memory and CPU of a long recording: the default rig with the base IMU at 1 kHz and the
+// auxiliary IMU and gyroscope removed, 2 cameras, 600 s (CTCAL_BENCH_LONG_DURATION), seed 7,
+// table4 guesses; calibrated as `ctcal calibrate` does (data loaded, then taken over by
+// CalibrateSpline, report data included; the report's rendering is not). The data are simulated
+// by a child process (its memory is not this process') into a temporary folder, unless
+// CTCAL_BENCH_LONG_DATA names a folder `ctcal simulate` wrote. peak_rss_mb is the process' peak
+// (getrusage), so run this case alone:
+//   build/bench/bench_calibrate --benchmark_filter=BM_LongRecordingMemory
+void BM_LongRecordingMemory(benchmark::State& state) {
+  std::string dir;
+  if (const char* env = std::getenv("CTCAL_BENCH_LONG_DATA")) {
+    dir = env;
+  } else {
+    const char* d = std::getenv("CTCAL_BENCH_LONG_DURATION");
+    const double duration = d != nullptr ? std::atof(d) : 600.0;
+    dir = (std::filesystem::temp_directory_path() /
+           ("ctcal_bench_long_" + std::to_string(static_cast<int>(duration))))
+              .string();
+    RigConfig truth = sim::DefaultRig();
+    truth.Find(truth.base_imu)->noise.update_rate = 1000.0;
+    truth.sensors.erase(std::remove_if(truth.sensors.begin(), truth.sensors.end(),
+                                       [&](const SensorConfig& s) {
+                                         return s.IsInertial() && s.name != truth.base_imu;
+                                       }),
+                        truth.sensors.end());
+    const pid_t child = fork();
+    if (child == 0) {
+      SimulateInto(dir, truth, duration, 7);
+      std::_Exit(0);
+    }
+    int status = 0;
+    if (child < 0 || waitpid(child, &status, 0) != child || !WIFEXITED(status) ||
+        WEXITSTATUS(status) != 0) {
+      state.SkipWithError("simulating the long recording failed");
+      return;
+    }
+  }
+  SplineCalibratorOptions options;
+  options.threads = 2;
+  SplineCalibrationResult result;
+  for (auto _ : state) {
+    const RigConfig rig = LoadRig(dir + "/rig.yaml");
+    result = CalibrateSpline(rig, LoadDataset(dir, rig), options, [](const std::string&) {});
+    benchmark::DoNotOptimize(result.result.solver);
+  }
+  state.counters["peak_rss_mb"] = CurrentMemoryUsage().peak_mb;
+  SetRunCounters(result, &state);
+}
+BENCHMARK(BM_LongRecordingMemory)
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()

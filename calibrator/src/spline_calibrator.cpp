@@ -12,6 +12,7 @@
 #include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/calibrator/knot_spacing.h"
 #include "ctcal/calibrator/marginal_covariance.h"
+#include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/observability/motion_prediction.h"
 #include "ctcal/calibrator/observability/numeric_observability.h"
 #include "spline_problem_impl.h"
@@ -170,6 +171,10 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
     const SensorData& d = data_of(s.name());
     const std::int64_t margin = margin_ns(s);
     std::size_t v = 0, dropped = 0;
+    // Nearly every corner is kept: reserve once instead of growing to up to twice the size.
+    cam.corners.reserve(d.corners.size());
+    cam.stamps.reserve(d.corners.size());
+    cam.corner_ids.reserve(d.corners.size());
     for (const CornerObservation& c : d.corners) {
       while (v < cam.views.size() && cam.views[v].t_ns < c.t_ns)
         ++v;
@@ -211,6 +216,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
         own_lo = d.imu.front().t_ns;
         own_hi = d.imu.back().t_ns;
       }
+      in.imu.reserve(d.imu.size());
       for (const ImuSample& z : d.imu) {
         if (inside(z.t_ns, offset, margin))
           in.imu.push_back(z);
@@ -224,6 +230,7 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
         own_lo = d.gyro.front().t_ns;
         own_hi = d.gyro.back().t_ns;
       }
+      in.gyro.reserve(d.gyro.size());
       for (const GyroSample& z : d.gyro) {
         if (inside(z.t_ns, offset, margin))
           in.gyro.push_back(z);
@@ -393,6 +400,7 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
     }
   }
 
+  LogMemory(log, "residual statistics");
   if (!options.compute_covariance)
     return;
 
@@ -420,6 +428,7 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
   // One Schur complement of the data; the priors (on calibration blocks only) add to it.
   const MarginalInformation info_data =
       ComputeMarginalInformation(problem, calib, data_only, options.threads);
+  LogMemory(log, "marginal information");
   MarginalInformation info = info_data;
   AddCalibrationInformation(problem, calib, prior_ids, &info);
   const CalibrationCovariance cov = InvertInformation(info);
@@ -471,10 +480,15 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
 
 }  // namespace spline_internal
 
-SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
-                                        const std::map<std::string, SensorData>& data,
-                                        const SplineCalibratorOptions& options_in,
-                                        const CalibrationLog& log) {
+namespace {
+
+// CalibrateSpline on `data`; with `owned` (the same map, the caller's to give up) the cameras'
+// corners are released once Prepare has selected them.
+SplineCalibrationResult Calibrate(const RigConfig& rig,
+                                  const std::map<std::string, SensorData>& data,
+                                  std::map<std::string, SensorData>* owned,
+                                  const SplineCalibratorOptions& options_in,
+                                  const CalibrationLog& log) {
   const auto t_start = std::chrono::steady_clock::now();
   SplineCalibratorOptions options = options_in;
   if (options.threads <= 0)
@@ -490,19 +504,33 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
   CalibrationState state(rig);
   options.coarse_init.threads = options.threads;
   options.coarse_init.views_min_corners = options.min_corners_per_view;
+  LogMemory(log, "calibration starts");
   const CoarseInitResult init = InitializeFromData(&state, data, options.coarse_init, log);
+  ReleaseFreedMemory();
+  LogMemory(log, "coarse initialisation");
   Prepared prep;
   log("[2/6] board views and data selection");
   const auto t_prepare = std::chrono::steady_clock::now();
   const std::clock_t cpu_prepare = std::clock();
   Prepare(&state, data, options, init, log, &prep);
   SeedBiasSplines(init, &state);
+  if (owned != nullptr) {
+    // Prepare holds the selected corners; the rest of the run reads the inertial data only
+    // (CompleteObservability), so the loaded corners go.
+    for (const PreparedCamera& cam : prep.cameras) {
+      const auto it = owned->find(cam.state->name());
+      if (it != owned->end())
+        std::vector<CornerObservation>().swap(it->second.corners);
+    }
+  }
+  ReleaseFreedMemory();
   log(Fmt("  board views and data selection: %.2f s (CPU %.2f s)",
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_prepare).count(),
           static_cast<double>(std::clock() - cpu_prepare) / CLOCKS_PER_SEC));
   log(Fmt("  trajectory: %.3f .. %.3f s (base clock), knot spacing %.4f s",
           1e-9 * static_cast<double>(prep.t0_ns), 1e-9 * static_cast<double>(prep.t1_ns),
           prep.knot_spacing_s));
+  LogMemory(log, "data selected");
 
   SplineCalibrationResult out;
   out.init_seconds =
@@ -529,6 +557,22 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
   if (out.result.solver)
     out.result.solver->seconds = out.total_seconds;
   return out;
+}
+
+}  // namespace
+
+SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
+                                        const std::map<std::string, SensorData>& data,
+                                        const SplineCalibratorOptions& options,
+                                        const CalibrationLog& log) {
+  return Calibrate(rig, data, nullptr, options, log);
+}
+
+SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
+                                        std::map<std::string, SensorData>&& data,
+                                        const SplineCalibratorOptions& options,
+                                        const CalibrationLog& log) {
+  return Calibrate(rig, data, &data, options, log);
 }
 
 std::string FormatParameterTable(const RigConfig& result) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 
@@ -163,6 +164,7 @@ class IterationLogger : public ceres::IterationCallback {
                   s.cost, -s.cost_change, s.step_norm, s.step_is_successful ? "   " : "rej",
                   s.cumulative_time_in_seconds);
     log_(line);
+    LogMemory(log_, "iteration " + std::to_string(s.iteration));
     if (!std::isfinite(s.cost))
       return ceres::SOLVER_ABORT;
     return ceres::SOLVER_CONTINUE;
@@ -254,6 +256,7 @@ class SplineProblem {
                   spline_.NumKnots(), spline_.timing().dt_s(), poses.size(), imu.size(),
                   r.initial_cost, r.final_cost, r.iterations);
     log_(line);
+    LogMemory(log_, "trajectory fitted");
   }
 
   // --- the problem ------------------------------------------------------------------------------
@@ -303,6 +306,7 @@ class SplineProblem {
         P.SetParameterBlockConstant(b.values);
     }
     BoundCameraParameters(prep_.cameras, &P);
+    LogMemory(log_, "problem built");
   }
 
   ceres::Solver::Summary Solve() {
@@ -481,6 +485,8 @@ class SplineProblem {
   }
 
   ceres::Problem& problem() { return *problem_; }
+  // Destroys the problem (its residual blocks); the values stay in the spline and the state.
+  void ReleaseProblem() { problem_.reset(); }
 
   // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
   Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
@@ -607,22 +613,31 @@ class SplineProblem {
       const std::int64_t stamp = cam->stamps[first];
       const int seg = SegmentOf(stamp, s.time_offset);
       segments_.push_back(seg);
-      std::vector<CornerMeasurement> corners;
-      for (std::size_t i = first; i < last; ++i) {
-        if (!cam->removed[i])
-          corners.push_back(cam->corners[i]);
-      }
       typename FrameCornersResidual<N, Rep>::Parameters p;
       p.traj = TrajBlocks(seg);
       p.q_B_C = s.q_B_S.data();
       p.t_B_C = s.t_B_S.data();
       p.time_offset = &s.time_offset;
       p.params = s.camera->mutable_params();
-      problem_->AddResidualBlock(
-          MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners),
-                                           SegmentClock::At(stamp, spline_.timing(), seg),
-                                           robust ? options_.huber_threshold : 0.0),
-          nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
+      const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
+      const double huber = robust ? options_.huber_threshold : 0.0;
+      ceres::CostFunction* cost = nullptr;
+      if (std::none_of(cam->removed.begin() + static_cast<std::ptrdiff_t>(first),
+                       cam->removed.begin() + static_cast<std::ptrdiff_t>(last),
+                       [](bool r) { return r; })) {
+        // The block reads the frame's corners where Prepare put them (prep_ outlives the
+        // problem): the corners are held once, not once more per block.
+        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), &cam->corners[first],
+                                                static_cast<int>(last - first), clock, huber);
+      } else {
+        std::vector<CornerMeasurement> corners;
+        for (std::size_t i = first; i < last; ++i) {
+          if (!cam->removed[i])
+            corners.push_back(cam->corners[i]);
+        }
+        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners), clock, huber);
+      }
+      problem_->AddResidualBlock(cost, nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
     });
   }
 
@@ -952,6 +967,8 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
                       s.jacobian_evaluation_time_in_seconds - s.linear_solver_time_in_seconds,
                   s.num_linear_solves, s.num_residual_blocks, s.num_residuals, cpu);
     log(line);
+    ReleaseFreedMemory();  // Ceres' Jacobian and factor of this solve
+    LogMemory(log, "solved");
     return s;
   };
   const ceres::Solver::Summary last = RunStages(&sp, solve, options.outlier_probability,
@@ -969,6 +986,8 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   const auto t_cov = Clock::now();
   const std::clock_t cpu_cov = std::clock();
   sp.Finish(out);
+  sp.ReleaseProblem();  // the report data need the spline only
+  ReleaseFreedMemory();
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();
   {
     char line[160];
@@ -976,6 +995,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
                   out->covariance_seconds,
                   static_cast<double>(std::clock() - cpu_cov) / CLOCKS_PER_SEC);
     log(line);
+    LogMemory(log, "covariance");
   }
   if (options.report_data) {
     const auto t_report = Clock::now();
@@ -985,6 +1005,7 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
     std::snprintf(line, sizeof line, "  report data: every measurement at the final values, %.2f s",
                   std::chrono::duration<double>(Clock::now() - t_report).count());
     log(line);
+    LogMemory(log, "report data");
   }
 }
 

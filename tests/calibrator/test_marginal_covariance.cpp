@@ -1,13 +1,17 @@
 // The marginal covariance must equal the calibration block of the full inverse on well-posed
 // problems, and say "undetermined" exactly for the parameters of null directions.
 #include <ceres/autodiff_cost_function.h>
+#include <ceres/crs_matrix.h>
+#include <ceres/manifold.h>
 #include <ceres/problem.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/spline/so3.h"
@@ -280,6 +284,122 @@ TEST(MarginalCovariance, RotationSigmaUsesFullAngleLeftPerturbation) {
       problem, {{q.coeffs().data(), {"R[0]", "R[1]", "R[2]"}, {deg, deg, deg}}}));
   for (int i = 0; i < 3; ++i)
     EXPECT_NEAR(cov.sigma(i), 0.01, 1e-9);
+}
+
+// r = sum_b A_b x_b over any parameter blocks (ambient coordinates), for random sparsity patterns.
+class LinearBlocks : public ceres::CostFunction {
+ public:
+  LinearBlocks(std::vector<Eigen::MatrixXd> A) : A_(std::move(A)) {
+    set_num_residuals(static_cast<int>(A_.front().rows()));
+    for (const Eigen::MatrixXd& a : A_)
+      mutable_parameter_block_sizes()->push_back(static_cast<int>(a.cols()));
+  }
+  bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
+    Eigen::Map<Eigen::VectorXd> e(r, num_residuals());
+    e.setZero();
+    for (std::size_t b = 0; b < A_.size(); ++b) {
+      e += A_[b] * Eigen::Map<const Eigen::VectorXd>(x[b], A_[b].cols());
+      if (jacobians != nullptr && jacobians[b] != nullptr)
+        Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            jacobians[b], A_[b].rows(), A_[b].cols()) = A_[b];
+    }
+    return true;
+  }
+
+ private:
+  std::vector<Eigen::MatrixXd> A_;
+};
+
+// The in-place accumulation of H (its nuisance part as a fixed lower-triangular pattern) must give
+// the Schur complement of the dense J^T J, whatever order the residual blocks list their
+// parameter blocks in, with manifolds (tangent < ambient), constant blocks of both kinds, an
+// untouched nuisance block, and residual blocks that touch calibration blocks only.
+TEST(MarginalCovariance, InPlaceAccumulationEqualsTheDenseSchurComplement) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> gauss;
+  // Nuisance: 30 blocks of sizes 1..3 and 5 unit quaternions; calibration: a 2-vector, a
+  // quaternion, a constant 3-vector; plus a constant and an untouched nuisance block.
+  std::vector<std::vector<double>> values;
+  for (int k = 0; k < 30; ++k)
+    values.emplace_back(static_cast<std::size_t>(1 + k % 3), 0.1 * k);
+  for (int k = 0; k < 5; ++k)
+    values.push_back({0.1 * k, 0.2, -0.3, 1.0});
+  values.push_back({0.5, -0.5});           // 35: calibration 2-vector
+  values.push_back({0.1, 0.2, 0.3, 1.0});  // 36: calibration quaternion
+  values.push_back({1.0, 2.0, 3.0});       // 37: constant calibration
+  values.push_back({4.0, 5.0});            // 38: constant nuisance
+  values.push_back({6.0});                 // 39: untouched nuisance
+  for (std::vector<double>& q : values) {
+    if (q.size() == 4)
+      Eigen::Map<Eigen::Vector4d>(q.data()).normalize();
+  }
+  ceres::EigenQuaternionManifold quaternion;
+  ceres::Problem::Options po;
+  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  for (std::vector<double>& v : values) {
+    if (v.size() == 4)
+      problem.AddParameterBlock(v.data(), 4, &quaternion);
+    else
+      problem.AddParameterBlock(v.data(), static_cast<int>(v.size()));
+  }
+  problem.SetParameterBlockConstant(values[37].data());
+  problem.SetParameterBlockConstant(values[38].data());
+  // Residual blocks over a window of nearby nuisance blocks (a chain, as knots are), in shuffled
+  // order, with a random subset of the calibration and constant blocks.
+  for (int r = 0; r < 300; ++r) {
+    std::vector<int> blocks;
+    const int first = r % 33;
+    for (int k = first; k < first + 3; ++k)
+      blocks.push_back(k);
+    if (r % 10 == 0)
+      blocks = {35, 36};  // calibration only
+    for (const int extra : {35, 36, 37, 38}) {
+      if (std::find(blocks.begin(), blocks.end(), extra) == blocks.end() && rng() % 2 == 0)
+        blocks.push_back(extra);
+    }
+    std::shuffle(blocks.begin(), blocks.end(), rng);
+    const int rows = 2 + static_cast<int>(rng() % 6);
+    std::vector<Eigen::MatrixXd> A;
+    std::vector<double*> pointers;
+    for (const int b : blocks) {
+      Eigen::MatrixXd a(rows, static_cast<int>(values[static_cast<std::size_t>(b)].size()));
+      for (int i = 0; i < a.size(); ++i)
+        a.data()[i] = gauss(rng);
+      A.push_back(a);
+      pointers.push_back(values[static_cast<std::size_t>(b)].data());
+    }
+    problem.AddResidualBlock(new LinearBlocks(A), nullptr, pointers);
+  }
+  const std::vector<CalibrationBlock> calib = {
+      {values[35].data(), {"a0", "a1"}, {1.0, 1.0}},
+      {values[36].data(), {"q0", "q1", "q2"}, {1.0, 1.0, 1.0}},
+      {values[37].data(), {"c0", "c1", "c2"}, {1.0, 1.0, 1.0}}};
+  const MarginalInformation info = ComputeMarginalInformation(problem, calib, {}, 2);
+  ASSERT_EQ(info.names.size(), 5u);
+  EXPECT_EQ(info.nuisance_damping, 0.0);
+
+  // Reference: the dense J^T J over (touched nuisance, calibration), tangent coordinates.
+  ceres::Problem::EvaluateOptions eval;
+  for (std::size_t b = 0; b < 35; ++b)
+    eval.parameter_blocks.push_back(values[b].data());
+  eval.parameter_blocks.push_back(values[35].data());
+  eval.parameter_blocks.push_back(values[36].data());
+  ceres::CRSMatrix crs;
+  ASSERT_TRUE(problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs));
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int i = 0; i < crs.num_rows; ++i) {
+    for (int e = crs.rows[static_cast<std::size_t>(i)];
+         e < crs.rows[static_cast<std::size_t>(i) + 1]; ++e)
+      J(i, crs.cols[static_cast<std::size_t>(e)]) = crs.values[static_cast<std::size_t>(e)];
+  }
+  const Eigen::MatrixXd H = J.transpose() * J;
+  const int n = crs.num_cols - 5;
+  ASSERT_EQ(info.nuisance_dimension, n + 1);  // the untouched block counts, and is left out
+  const Eigen::MatrixXd H_nc = H.topRightCorner(n, 5);
+  const Eigen::MatrixXd expected =
+      H.bottomRightCorner(5, 5) - H_nc.transpose() * H.topLeftCorner(n, n).ldlt().solve(H_nc);
+  EXPECT_LT((info.information - expected).norm(), 1e-10 * expected.norm());
 }
 
 TEST(MarginalCovariance, ConstantCalibrationBlocksAreSkipped) {

@@ -165,6 +165,34 @@ TYPED_TEST(FrameCornersTest, JacobiansMatchCentralDifferences) {
   }
 }
 
+// A block reading corners held by the caller (the calibrator's one copy) is the block that owns a
+// copy of them: the same residuals and Jacobians to the last bit, in L2 and with Huber.
+TYPED_TEST(FrameCornersTest, HeldCornersGiveTheSameBlockAsOwnedOnes) {
+  for (const CameraModelType type : kModels) {
+    Eigen::VectorXd params = testing::CameraParams(type);
+    const CameraModel camera(type, params, Eigen::Vector2i(640, 480));
+    const std::int64_t stamp = testing::kT0Ns + 437'000'000;
+    const auto corners = this->Corners(camera, stamp, 1.0, 3, 5);
+    const int seg = this->SegmentAt(stamp);
+    const SegmentClock clock = SegmentClock::At(stamp, this->spline_.timing(), seg);
+    for (const double huber : {0.0, 3.0}) {
+      const std::unique_ptr<ceres::CostFunction> owned(
+          MakeFrameCornersResidual<TestFixture::N, TestFixture::Rep>(type, corners, clock, huber));
+      const std::unique_ptr<ceres::CostFunction> held(
+          MakeFrameCornersResidual<TestFixture::N, TestFixture::Rep>(
+              type, corners.data(), static_cast<int>(corners.size()), clock, huber));
+      const std::vector<double*> blocks = this->FrameBlocks(seg, params.data());
+      const testing::Evaluation a = testing::EvaluateCost(*owned, blocks);
+      const testing::Evaluation b = testing::EvaluateCost(*held, blocks);
+      ASSERT_TRUE(a.ok && b.ok);
+      EXPECT_GT(a.r.norm(), 0.0);
+      EXPECT_EQ(a.r, b.r) << CameraModelName(type) << " huber " << huber;
+      for (std::size_t k = 0; k < blocks.size(); ++k)
+        EXPECT_EQ(a.J[k], b.J[k]) << CameraModelName(type) << " block " << k;
+    }
+  }
+}
+
 // Cost, gradient and Gauss-Newton Hessian (tangent space, as Ceres sees them) of one noisy frame
 // with three outliers: compressed == per corner, in L2 and with Huber (threshold 3).
 TYPED_TEST(FrameCornersTest, CostGradientAndHessianEqualPerCorner) {

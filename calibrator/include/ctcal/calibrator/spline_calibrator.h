@@ -127,6 +127,12 @@ SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
                                         const std::map<std::string, SensorData>& data,
                                         const SplineCalibratorOptions& options,
                                         const CalibrationLog& log);
+// The same, taking the data over: the cameras' loaded corners are released once the calibrator has
+// selected its own (a 10 min recording's ~3 M corners hold ~140 MB; docs/performance.md, step 7).
+SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
+                                        std::map<std::string, SensorData>&& data,
+                                        const SplineCalibratorOptions& options,
+                                        const CalibrationLog& log);
 
 // The final table of the terminal: one row per estimated scalar with its value and sigma.
 std::string FormatParameterTable(const RigConfig& result);

@@ -20,20 +20,20 @@ namespace ctcal {
 // L2. Writes r = [z; last] (kNx + 1 values) and R (kNx x kNx, upper triangular, rows beyond 2M
 // zero), where x perturbs the pose on the left (p_C -> Exp(dtheta) p_C + dt) and the intrinsics.
 // Returns false when a corner does not project validly.
+// `corners` points to the frame's M corners.
 template <class Model>
-bool CompressFrameCorners(const std::vector<CornerMeasurement>& corners, const double* params,
+bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double* params,
                           const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
                           double huber_threshold, double* residuals,
                           Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
   constexpr int kNx = 6 + Model::kNumParams;
   const double huber = huber_threshold;
-  const int M = static_cast<int>(corners.size());
   Eigen::Matrix<double, Eigen::Dynamic, kNx + 1> A(2 * M, kNx + 1);
   double remainder = 0.0;  // sum rho(s_i) - rho'(s_i) s_i
   Eigen::Matrix<double, 2, 3> J_uv_p;
   Eigen::Matrix<double, 2, Model::kNumParams> J_uv_params;
   for (int i = 0; i < M; ++i) {
-    const CornerMeasurement& m = corners[static_cast<std::size_t>(i)];
+    const CornerMeasurement& m = corners[i];
     const Eigen::Vector3d p_C = R_C_W * m.p_W + t_C_W;
     Eigen::Vector2d uv;
     if (!Model::template Project<double>(params, p_C, &uv, &J_uv_p, &J_uv_params))
@@ -70,6 +70,15 @@ bool CompressFrameCorners(const std::vector<CornerMeasurement>& corners, const d
   const double rho = rows == kNx + 1 ? QR(kNx, kNx) : 0.0;
   r(kNx) = std::sqrt(rho * rho + std::max(remainder, 0.0));
   return true;
+}
+
+template <class Model>
+bool CompressFrameCorners(const std::vector<CornerMeasurement>& corners, const double* params,
+                          const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
+                          double huber_threshold, double* residuals,
+                          Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
+  return CompressFrameCorners<Model>(corners.data(), static_cast<int>(corners.size()), params,
+                                     R_C_W, t_C_W, huber_threshold, residuals, R);
 }
 
 }  // namespace ctcal

@@ -112,12 +112,26 @@ class FrameCornersResidual {
     // (threshold on the whitened corner residual's norm), 0: plain L2.
     Analytic(std::vector<CornerMeasurement> corners, const SegmentClock& clock,
              double huber_threshold)
-        : corners_(std::move(corners)), clock_(clock), huber_(huber_threshold) {
+        : owned_(std::move(corners)),
+          corners_(owned_.data()),
+          num_corners_(static_cast<int>(owned_.size())),
+          clock_(clock),
+          huber_(huber_threshold) {
       set_num_residuals(kNx + 1);
       *mutable_parameter_block_sizes() = BlockSizes(Model::kNumParams);
     }
+    // The same on `count` corners held by the caller, which must outlive the block: a long
+    // recording's millions of corners are then held once (docs/performance.md, step 7).
+    Analytic(const CornerMeasurement* corners, int count, const SegmentClock& clock,
+             double huber_threshold)
+        : corners_(corners), num_corners_(count), clock_(clock), huber_(huber_threshold) {
+      set_num_residuals(kNx + 1);
+      *mutable_parameter_block_sizes() = BlockSizes(Model::kNumParams);
+    }
+    Analytic(const Analytic&) = delete;
+    Analytic& operator=(const Analytic&) = delete;
 
-    int NumCorners() const { return static_cast<int>(corners_.size()); }
+    int NumCorners() const { return num_corners_; }
 
     bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
       using namespace residual_internal;
@@ -142,7 +156,8 @@ class FrameCornersResidual {
       // [J | e] of every corner, weighted for the robust stage, QR-compressed to [R | z] and the
       // remainder row (frame_corners_compression.h; this file's comment derives it).
       MatX R;
-      if (!CompressFrameCorners<Model>(corners_, p[kParams], R_C_W, t_C_W, huber_, residuals, &R))
+      if (!CompressFrameCorners<Model>(corners_, num_corners_, p[kParams], R_C_W, t_C_W, huber_,
+                                       residuals, &R))
         return false;
       if (jacobians == nullptr)
         return true;
@@ -190,7 +205,9 @@ class FrameCornersResidual {
       return out;
     }
 
-    std::vector<CornerMeasurement> corners_;
+    std::vector<CornerMeasurement> owned_;  // empty when the caller holds the corners
+    const CornerMeasurement* corners_;
+    int num_corners_;
     SegmentClock clock_;
     double huber_;
   };
@@ -209,9 +226,23 @@ ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
   });
 }
 
+// The same on `count` corners held by the caller (not copied): they must outlive the block.
+template <int N, Se3Representation Rep>
+ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
+                                              const CornerMeasurement* corners, int count,
+                                              const SegmentClock& clock, double huber_threshold) {
+  return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
+    using Model = decltype(model);
+    return new typename FrameCornersResidual<N, Rep>::template Analytic<Model>(
+        corners, count, clock, huber_threshold);
+  });
+}
+
 #define CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(N, REP)                                         \
   extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
-      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);
+      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);        \
+  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
+      CameraModelType, const CornerMeasurement*, int, const SegmentClock&, double);
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(4, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(5, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(6, kSplit)
