@@ -179,18 +179,28 @@ double PnpRms(const CameraModel& camera, const Board& board,
 }
 
 // One refinement: intrinsics (distortion held when !free_distortion) and all poses, corners with
-// keep[k] only, Cauchy loss.
+// keep[k] only, Cauchy loss. Ceres gives up at once when a residual cannot be evaluated at the
+// start ("Residual and Jacobian evaluation failed"): a corner that the start values cannot
+// project (a guess whose distortion folds the outer field, a PnP pose that puts a corner of a
+// grazing view behind the camera) is left out of this refinement and counted in
+// `*unprojectable`; it is back in the next one if it projects there.
 bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vector<CornerRef>& refs,
             const std::vector<char>& keep, bool free_distortion,
-            const IntrinsicsInitOptions& options) {
+            const IntrinsicsInitOptions& options, int* unprojectable) {
   Eigen::VectorXd params = camera->params();
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   ceres::CauchyLoss loss(options.cauchy_px);
+  const std::vector<double> start_errors = ReprojectionErrors(*camera, *views, refs);
+  *unprojectable = 0;
   for (std::size_t k = 0; k < refs.size(); ++k) {
     if (!keep[k])
       continue;
+    if (!std::isfinite(start_errors[k])) {
+      ++*unprojectable;
+      continue;
+    }
     ViewState& v = (*views)[static_cast<std::size_t>(refs[k].view)];
     ceres::CostFunction* cost = VisitCameraModel(camera->type(), [&](auto model) {
       using Model = decltype(model);
@@ -342,10 +352,22 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
   // --seed 7, whose views determine fu to 0.03 px) and the full refinement starts from the
   // guess instead.
   std::vector<char> keep(refs.size(), 1);
+  int unprojectable = 0;
+  const auto refine = [&](CameraModel* model, std::vector<ViewState>* poses, bool free_distortion) {
+    const bool ok = Refine(model, poses, refs, keep, free_distortion, options, &unprojectable);
+    result.unprojectable = std::max(result.unprojectable, unprojectable);
+    return ok;
+  };
+  const auto failed = [&] {
+    return InitError(kStage, camera_name,
+                     Format("the refinement of the intrinsics failed (%d of %d corners not "
+                            "projectable at its start)",
+                            unprojectable, static_cast<int>(refs.size())));
+  };
   CameraModel held = camera;
   std::vector<ViewState> held_views = views;
-  if (!Refine(&held, &held_views, refs, keep, false, options))
-    throw InitError(kStage, camera_name, "the refinement of the intrinsics failed");
+  if (!refine(&held, &held_views, false))
+    throw failed();
   if (!options.estimate_distortion || FocalBeyondRatio(held, guess, options.max_focal_ratio) < 0) {
     camera = held;
     views = std::move(held_views);
@@ -353,8 +375,8 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
     factor_note += Format(", the distortion-free fit left x%.2f of the focal guess: not used",
                           options.max_focal_ratio);
   }
-  if (options.estimate_distortion && !Refine(&camera, &views, refs, keep, true, options))
-    throw InitError(kStage, camera_name, "the refinement of the intrinsics failed");
+  if (options.estimate_distortion && !refine(&camera, &views, true))
+    throw failed();
   const std::vector<double> errors = ReprojectionErrors(camera, views, refs);
   std::vector<double> finite;
   for (const double e : errors)
@@ -368,8 +390,7 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
       keep[k] = 0;
       ++result.outliers;
     }
-  if (result.outliers > 0 &&
-      !Refine(&camera, &views, refs, keep, options.estimate_distortion, options))
+  if (result.outliers > 0 && !refine(&camera, &views, options.estimate_distortion))
     throw InitError(kStage, camera_name, "the refinement without outliers failed");
   // Views that are all nearly fronto-parallel (or alike) leave focal length and board depth
   // trading freely: the refinement then walks far from any plausible focal length (towards an
@@ -382,20 +403,22 @@ IntrinsicsInitResult InitCameraIntrinsics(const std::string& camera_name, const 
                "alike: tilt the board relative to the camera)",
                names[static_cast<std::size_t>(i)].c_str(), guess.params()[i], camera.params()[i]));
   result.rms_px = Rms(ReprojectionErrors(camera, views, refs), &keep);
-  result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
+  result.corners = static_cast<int>(std::count(keep.begin(), keep.end(), 1)) - unprojectable;
   result.views = static_cast<int>(views.size());
   result.camera = camera;
   std::string values;
   for (int i = 0; i < camera.NumParams(); ++i)
     values += (i ? " " : "") +
               Format("%s=%.4g", names[static_cast<std::size_t>(i)].c_str(), camera.params()[i]);
-  result.summary = camera_name +
-                   Format(
-                       ": focal x%.4f (Zhang, %d views%s), then refined on %d views / %d "
-                       "corners (%d outliers): RMS %.3f px (guess %.2f px); ",
-                       result.focal_scale, zhang_views, factor_note.c_str(), result.views,
-                       result.corners, result.outliers, result.rms_px, result.rms_px_guess) +
-                   values;
+  result.summary =
+      camera_name +
+      Format(
+          ": focal x%.4f (Zhang, %d views%s), then refined on %d views / %d "
+          "corners (%d outliers, %d not projectable at a start): RMS %.3f px (guess "
+          "%.2f px); ",
+          result.focal_scale, zhang_views, factor_note.c_str(), result.views, result.corners,
+          result.outliers, result.unprojectable, result.rms_px, result.rms_px_guess) +
+      values;
   if (log)
     log(result.summary);
   return result;

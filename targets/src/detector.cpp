@@ -119,7 +119,7 @@ double EstimateNoiseSigma(const cv::Mat& gray) {
 // (The sandwich of the model residuals r_i = g_i^T d_i instead measured how far a blurred
 // X-junction is from the ideal one, symmetric misfit that does not move q: 7x the scatter.)
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
-                  double noise_sigma) {
+                  double noise_sigma, const CornerWarp* warp) {
   CV_Assert(gray.type() == CV_8UC1);
   // Near the image border the window shrinks to fit rather than give up on the corner.
   const double room = std::min(std::min(uv->x(), uv->y()),
@@ -137,11 +137,30 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     }
   }
   cv::Mat patch;
-  // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates).
+  // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates); with a warp,
+  // `at` and the patch are in rectified coordinates, each pixel read bilinearly at its image point.
   const auto sample_patch = [&](const Eigen::Vector2d& at) {
-    cv::getRectSubPix(gray, cv::Size(n, n),
-                      cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
-                      CV_32F);
+    if (warp == nullptr) {
+      cv::getRectSubPix(gray, cv::Size(n, n),
+                        cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
+                        CV_32F);
+      return;
+    }
+    patch.create(n, n, CV_32F);
+    for (int r = 0; r < n; ++r) {
+      float* out = patch.ptr<float>(r);
+      for (int c = 0; c < n; ++c) {
+        const Eigen::Vector2d p = warp->ToImage(at + Eigen::Vector2d(c - h - 1, r - h - 1));
+        const double x = std::clamp(p.x(), 0.0, gray.cols - 1.001);
+        const double y = std::clamp(p.y(), 0.0, gray.rows - 1.001);
+        const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+        const double fx = x - x0, fy = y - y0;
+        const uint8_t* top = gray.ptr<uint8_t>(y0) + x0;
+        const uint8_t* bottom = gray.ptr<uint8_t>(y0 + 1) + x0;
+        out[c] = static_cast<float>((1.0 - fy) * ((1.0 - fx) * top[0] + fx * top[1]) +
+                                    fy * ((1.0 - fx) * bottom[0] + fx * bottom[1]));
+      }
+    }
   };
   // f(d, w, g) for every pixel of the window: its offset d from the centre, its weight w and the
   // central-difference gradient g of the patch there.
@@ -199,7 +218,7 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
     *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
   }
-  *uv = q;
+  *uv = warp == nullptr ? q : warp->ToImage(q);
   return true;
 }
 
@@ -1038,8 +1057,11 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
       result = DetectCharuco(gray, noise_sigma);
       break;
   }
-  if (options_.refine && result.board_found)
+  if (options_.refine && result.board_found) {
+    if (options_.rectify)
+      RefineRectified(gray, noise_sigma, &result);
     AddModelError(&result);
+  }
   return result;
 }
 

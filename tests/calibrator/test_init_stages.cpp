@@ -277,6 +277,39 @@ TEST_F(InitStages, CameraWithoutViewsFails) {
                   ::testing::HasSubstr("stage 'camera intrinsics', sensor 'cam0'")));
 }
 
+// The demo's table4 guess of cam1 (equidistant fisheye; `ctcal simulate --scenario full --seed
+// 2024 --duration 60 --perturb table4`): PnP with the guessed model puts corners of grazing views
+// behind the camera, where the pinhole projection is undefined; Ceres stopped at such a start
+// ("Residual and Jacobian evaluation failed") and the stage kept the guess. Those corners are
+// left out of the refinement that cannot project them, counted and named in the summary, and the
+// focal length is found within 0.1 % of the truth.
+TEST(InitIntrinsicsDemo, CornersUnprojectableAtTheStartAreLeftOut) {
+  if (!fs::exists(CTCAL_BINARY))
+    GTEST_SKIP() << "the ctcal executable is not built: " << CTCAL_BINARY;
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("ctcal_init_demo_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(CTCAL_BINARY) +
+                          " simulate --scenario full --seed 2024 --duration 60 --perturb table4 "
+                          "--out " +
+                          dir.string() + " >/dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const RigConfig truth = LoadRig((dir / "truth.yaml").string());
+  const RigConfig guess = LoadRig((dir / "rig.yaml").string());
+  Warnings warnings;
+  const std::map<std::string, SensorData> data = LoadDataset(dir.string(), guess, &warnings);
+  fs::remove_all(dir);
+  const Board board(guess.target);
+  const IntrinsicsInitResult r = InitCameraIntrinsics("cam1", MakeCamera(*guess.Find("cam1")),
+                                                      board, data.at("cam1").corners, {}, {});
+  std::printf("%s\n", r.summary.c_str());
+  EXPECT_GT(r.unprojectable, 0);
+  EXPECT_LT(r.unprojectable, r.corners / 100);
+  EXPECT_THAT(r.summary, ::testing::HasSubstr("not projectable at a start"));
+  const std::vector<double> k = r.camera.intrinsics();
+  EXPECT_NEAR(k[0] / truth.Find("cam1")->intrinsics[0], 1.0, 1e-3);
+  EXPECT_NEAR(k[1] / truth.Find("cam1")->intrinsics[1], 1.0, 1e-3);
+}
+
 // Synthetic rates (no simulator): a sensor that sees the base's w(t + offset) with its own bias
 // and rate; the offset is found to a small fraction of the sample period, of either sign.
 // A zero-distortion guess of a strongly distorted lens (radtan k1 -0.28, k2 0.075, the left

@@ -48,6 +48,12 @@ struct DetectorOptions {
   // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
   // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
   bool refine = true;
+  // Inner corners refined once more in a patch rectified by their grid neighbourhood's quadratic
+  // board map (LocalBoardWarp): it removes most of the lens' outward pull (0.007 px at mid-field)
+  // from them, but the board's edge corners keep it, and that difference biased a radtan focal
+  // length by 4.8 sigma on independently rendered images. Off until edge corners are rectified
+  // too (docs/targets.md).
+  bool rectify = false;
   double min_sigma_px = 0.01;
   // The model error is measured only on views with at least this many grid fits (5 corners in a
   // row or column each); on others it is taken as default_model_sigma_px (rendered views: 0.02-
@@ -130,6 +136,10 @@ class Detector {
   DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCharuco(const cv::Mat& gray, double noise_sigma) const;
+  // Every corner refined again in a patch rectified by its neighbourhood's quadratic board map
+  // (LocalBoardWarp): on the straight-edged junction the refinement is not pulled outward by the
+  // lens' bending nor by the foreshortening's scale change across its window.
+  void RefineRectified(const cv::Mat& gray, double noise_sigma, DetectionResult* result) const;
   void AddModelError(DetectionResult* result) const;
 
   Board board_;
@@ -161,8 +171,32 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 // by a Gaussian; the window shrinks near the image border. Returns false if it does not converge.
 // `sigma_px` (optional): the estimate's standard deviation per coordinate caused by white image
 // noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
+//
+// `warp` (optional) refines in a locally rectified patch instead: a window pixel at offset e from
+// `warp->origin` is read from the image at origin + e + 1/2 (e' H_u e, e' H_v e), the second-order
+// bending of the board's lines (lens distortion, perspective) that LocalBoardWarp measures, so
+// that the junction's edges are straight in the window; the result is mapped back into the image.
+struct CornerWarp {
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  // px, where the warp is the identity
+  Eigen::Matrix2d H_u = Eigen::Matrix2d::Zero();     // 1/px, Hessian of the image u
+  Eigen::Matrix2d H_v = Eigen::Matrix2d::Zero();     // 1/px, Hessian of the image v
+  Eigen::Vector2d ToImage(const Eigen::Vector2d& rectified) const {
+    const Eigen::Vector2d e = rectified - origin;
+    return rectified + 0.5 * Eigen::Vector2d(e.dot(H_u * e), e.dot(H_v * e));
+  }
+};
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv,
-                  double* sigma_px = nullptr, double noise_sigma = 1.0);
+                  double* sigma_px = nullptr, double noise_sigma = 1.0,
+                  const CornerWarp* warp = nullptr);
+
+// The board-to-image map near corners[index] (corners sorted by id) as a quadratic in the board
+// coordinates, fitted to the detected corners of its 5 x 5 grid neighbourhood; its second
+// derivatives in image pixels are the rectifying warp there. `px_per_m`: the map's smallest
+// stretch (px per board metre). False without neighbours on both sides along both grid directions
+// (a one-sided fit extrapolates the bending), with fewer than 8, or when the quadratic misses a
+// corner by more than `max_fit_px` (corners of another board, or a board that is not flat).
+bool LocalBoardWarp(const Board& board, const std::vector<DetectedCorner>& corners, size_t index,
+                    double max_fit_px, CornerWarp* warp, double* px_per_m);
 
 // How far the corners of one view scatter about a smooth grid (px per coordinate), estimated from
 // the view alone: polynomials fitted along the rows and columns of the point grid, the median of

@@ -30,10 +30,14 @@ struct IntrinsicsInitOptions {
 
 struct IntrinsicsInitResult {
   explicit IntrinsicsInitResult(CameraModel model) : camera(std::move(model)) {}
-  CameraModel camera;         // the improved model
-  int views = 0;              // frames in the refinement
-  int corners = 0;            // corners kept
-  int outliers = 0;           // corners dropped as outliers
+  CameraModel camera;  // the improved model
+  int views = 0;       // frames in the refinement
+  int corners = 0;     // corners kept
+  int outliers = 0;    // corners dropped as outliers
+  // Corners the model could not project at a refinement's start values (behind the camera,
+  // beyond a fisheye's field or the model's domain): left out of that refinement, since Ceres
+  // stops at a start it cannot evaluate; the most over the refinements.
+  int unprojectable = 0;
   double focal_scale = 1.0;   // closed-form (Zhang) focal factor applied before the refinement
   double rms_px_guess = 0.0;  // RMS reprojection error with the guess (its own PnP poses)
   double rms_px = 0.0;        // RMS reprojection error of the kept corners after refinement
@@ -49,7 +53,8 @@ struct IntrinsicsInitResult {
 //  b. board poses by robust PnP with the rescaled model (stage 2);
 //  c. Ceres refinement of all intrinsics and the board poses with the model's templated projection
 //     and a Cauchy loss: projection parameters first (distortion held), then everything, then
-//     once more without the outlier corners.
+//     once more without the outlier corners. Each refinement leaves out the corners that the
+//     model cannot project at its start values (counted in `unprojectable`).
 // Throws InitError (stage "camera intrinsics") with fewer than min_views usable frames, when
 // the refinement does not converge to a valid model, or when it moves a focal length beyond
 // max_focal_ratio of the guess (views that do not determine it, e.g. all fronto-parallel).
