@@ -78,6 +78,13 @@ const BenchData& Data() {
   return *data;
 }
 
+// The calibrator's log on stderr when CTCAL_BENCH_LOG is set (the per-stage times), else silent.
+CalibrationLog BenchLog() {
+  if (std::getenv("CTCAL_BENCH_LOG") == nullptr)
+    return [](const std::string&) {};
+  return [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+}
+
 // The run's LM iterations, stage times (wall) and knots as counters.
 void SetRunCounters(const SplineCalibrationResult& result, benchmark::State* state) {
   state->counters["iterations"] = result.iterations;
@@ -89,27 +96,40 @@ void SetRunCounters(const SplineCalibrationResult& result, benchmark::State* sta
   state->counters["knots"] = result.num_knots;
 }
 
-// args: threads, compressed (0/1), analytic (0/1).
+// args: threads, compressed (0/1), analytic (0/1), inertial run length K (0: the sensor-rate
+// rule of InertialBlockSegments, -1: one block per sample, K > 0: compressed runs of K segments),
+// stacked: the run length of the uncompressed inertial blocks where the rule does not compress
+// (0: one block per sample there; SplineCalibratorOptions::stacked_inertial_segments),
+// robust_stop: SplineCalibratorOptions::robust_early_stop (0/1).
 void BM_Calibrate(benchmark::State& state) {
   const BenchData& d = Data();
   SplineCalibratorOptions options;
   options.threads = static_cast<int>(state.range(0));
   options.compress_frames = state.range(1) != 0;
   options.analytic = state.range(2) != 0;
+  options.compress_inertial = state.range(3) >= 0;
+  options.inertial_block_segments = static_cast<int>(std::max<std::int64_t>(0, state.range(3)));
+  options.stacked_inertial_segments = static_cast<int>(state.range(4));
+  options.robust_early_stop = state.range(5) != 0;
   SplineCalibrationResult result;
   for (auto _ : state) {
-    result = CalibrateSpline(d.rig, d.data, options, [](const std::string&) {});
+    result = CalibrateSpline(d.rig, d.data, options, BenchLog());
     benchmark::DoNotOptimize(result.result.solver);
   }
   SetRunCounters(result, &state);
 }
 BENCHMARK(BM_Calibrate)
-    ->ArgNames({"threads", "per_frame", "analytic"})
-    ->Args({2, 1, 1})
-    ->Args({1, 1, 1})
-    ->Args({2, 0, 1})
-    ->Args({1, 0, 1})
-    ->Args({2, 0, 0})
+    ->ArgNames({"threads", "per_frame", "analytic", "inertial_K", "stacked", "robust_stop"})
+    ->Args({2, 1, 1, 0, 1, 1})
+    ->Args({2, 1, 1, 0, 0, 0})
+    ->Args({2, 1, 1, 0, 1, 0})
+    ->Args({2, 1, 1, 0, 2, 1})
+    ->Args({2, 1, 1, 1, 1, 1})
+    ->Args({2, 1, 1, 4, 1, 1})
+    ->Args({1, 1, 1, 0, 1, 1})
+    ->Args({2, 0, 1, 0, 1, 1})
+    ->Args({1, 0, 1, 0, 1, 1})
+    ->Args({2, 0, 0, 0, 1, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()
@@ -189,11 +209,11 @@ void BM_Methods(benchmark::State& state) {
     if (state.range(0) == 0) {
       SplineCalibratorOptions options;
       options.threads = threads;
-      result = CalibrateSpline(rig, d.data, options, [](const std::string&) {});
+      result = CalibrateSpline(rig, d.data, options, BenchLog());
     } else {
       DiscreteCalibratorOptions options;
       options.threads = threads;
-      result = CalibrateDiscrete(rig, d.data, options, [](const std::string&) {});
+      result = CalibrateDiscrete(rig, d.data, options, BenchLog());
     }
     benchmark::DoNotOptimize(result.result.solver);
   }

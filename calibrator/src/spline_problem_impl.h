@@ -49,6 +49,10 @@ namespace spline_internal {
 // of the knot values (the linear interpolation between them is the Brownian bridge's mean).
 inline constexpr int kBiasOrder = 2;
 
+// The robust solve ends once its next step is predicted to lower the cost by less than this share
+// of it (RobustStageStop).
+inline constexpr double kRobustPredictedDecrease = 1e-4;
+
 // Everything the templated problem needs that does not depend on the spline type: the selected
 // data, the board views, and the shared run settings (prepared in spline_calibrator.cpp).
 struct PreparedCamera {
@@ -170,6 +174,33 @@ class IterationLogger : public ceres::IterationCallback {
   CalibrationLog log_;
 };
 
+// Ends the robust solve after an accepted step once the decrease is contracting so fast that the
+// next step is predicted to lower the cost by less than `relative` of it, instead of paying a
+// linear solve and an evaluation for a candidate step that Ceres' function tolerance would then
+// refuse (it keeps the current point in both cases). The prediction assumes at least the observed
+// rate: next <= (last / previous) x last, with last < 0.1 previous required (Gauss-Newton's fast
+// phase; a slow, linear phase keeps iterating). The robust point only seeds the outlier gate and
+// the plain solve, which has its own stop criterion in sigma (SplineCalibratorOptions::
+// stop_cost_change). Demo: decreases 6.76e6, 5.56e3 -> predicted 4.6 = 1.1e-5 of the cost: the
+// same point as before, one linear solve less (docs/performance.md step 7b).
+class RobustStageStop : public ceres::IterationCallback {
+ public:
+  explicit RobustStageStop(double relative) : relative_(relative) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (s.iteration == 0 || !s.step_is_successful)
+      return ceres::SOLVER_CONTINUE;
+    const double last = s.cost_change;  // the accepted step's decrease
+    const bool stop = previous_ > 0.0 && last >= 0.0 && last < 0.1 * previous_ &&
+                      last * (last / previous_) < relative_ * s.cost;
+    previous_ = last;
+    return stop ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  double relative_;
+  double previous_ = 0.0;
+};
+
 template <int N, Se3Representation Rep>
 class SplineProblem {
  public:
@@ -280,6 +311,7 @@ class SplineProblem {
 
   ceres::Solver::Summary Solve() {
     IterationLogger logger(log_);
+    RobustStageStop robust_stop(kRobustPredictedDecrease);
     ceres::Solver::Options so = SolverOptions(options_, &logger);
     // Gauss-Newton steps right away instead of Levenberg-Marquardt's default damping 1e-4, which
     // crawls along the weak directions: the trajectory fit starts every solve inside the basin
@@ -289,6 +321,8 @@ class SplineProblem {
       // The robust solve only seeds the outlier gate and the plain solve: a relative cost change
       // of 1e-6 (~0.5 at the demo's cost) is enough.
       so.function_tolerance = 1e-6;
+      if (options_.robust_early_stop)
+        so.callbacks.push_back(&robust_stop);
     } else if (options_.stop_cost_change > 0.0 && last_cost_ > 0.0) {
       // Stop when a step would lower the cost by less than stop_cost_change
       // (SplineCalibratorOptions derives the sigma bound); Ceres' tolerance is relative to the
@@ -771,7 +805,10 @@ class SplineProblem {
       const std::size_t count = set.functors.size();
       std::vector<double*> first = blocks_of(set.seg.front(), set.bseg.front());
       const std::vector<double*> common(first.begin() + R::kNumTrajBlocks, first.end());
-      const int K = InertialSegments(set, common);
+      const int compressed = InertialSegments(set, common);
+      const bool stacked = compressed == 0 && options_.analytic && options_.compress_inertial &&
+                           options_.stacked_inertial_segments > 0;
+      const int K = stacked ? std::min(options_.stacked_inertial_segments, 255) : compressed;
       if (K == 0) {
         for (std::size_t i = 0; i < count; ++i) {
           const typename R::Setup& setup = set.functors[i].s;
@@ -807,7 +844,7 @@ class SplineProblem {
         }
         ids.push_back(problem_->AddResidualBlock(
             new InertialBlockResidual<R>(std::move(functors), std::move(offsets), num_segments,
-                                         set.sizes, manifolds, 0.0),
+                                         set.sizes, manifolds, 0.0, stacked),
             nullptr, blocks));
         begin = end;
       }
@@ -923,12 +960,12 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
     // docs/performance.md.
     std::snprintf(line, sizeof line,
                   "    time: residual %.2f s, jacobian %.2f s, linear solver %.2f s, other %.2f s; "
-                  "%d residual blocks, %d rows; CPU %.2f s",
+                  "%d linear solves, %d residual blocks, %d rows; CPU %.2f s",
                   s.residual_evaluation_time_in_seconds, s.jacobian_evaluation_time_in_seconds,
                   s.linear_solver_time_in_seconds,
                   s.total_time_in_seconds - s.residual_evaluation_time_in_seconds -
                       s.jacobian_evaluation_time_in_seconds - s.linear_solver_time_in_seconds,
-                  s.num_residual_blocks, s.num_residuals, cpu);
+                  s.num_linear_solves, s.num_residual_blocks, s.num_residuals, cpu);
     log(line);
     ReleaseFreedMemory();  // Ceres' Jacobian and factor of this solve
     LogMemory(log, "solved");

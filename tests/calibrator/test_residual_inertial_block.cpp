@@ -185,9 +185,11 @@ class InertialBlockTest : public ::testing::Test {
     return StoredSize(L.Tg);
   }
 
-  // Per-sample blocks (K = 0) or compressed blocks of K segments over the same samples.
+  // Per-sample blocks (K = 0) or compressed (stacked: uncompressed) blocks of K segments over the
+  // same samples.
   template <class R>
-  void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber) {
+  void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber,
+                  bool stacked = false) {
     const std::size_t n = s.functors.size();
     if (K == 0) {
       for (std::size_t i = 0; i < n; ++i) {
@@ -219,7 +221,7 @@ class InertialBlockTest : public ::testing::Test {
         manifolds.push_back(rotation ? &left_ : nullptr);
       }
       P->AddResidualBlock(new InertialBlockResidual<R>(std::move(f), std::move(offsets), segments,
-                                                       s.sizes, manifolds, huber),
+                                                       s.sizes, manifolds, huber, stacked),
                           nullptr, blocks);
       begin = end;
     }
@@ -229,15 +231,18 @@ class InertialBlockTest : public ::testing::Test {
     double cost = 0.0;
     Eigen::VectorXd gradient;
     Eigen::MatrixXd H;
+    Eigen::VectorXd residuals;
+    Eigen::MatrixXd J;
   };
 
   template <class R>
-  Eval Evaluate(const Samples<R>& s, int K, double huber, bool intrinsics_constant) {
+  Eval Evaluate(const Samples<R>& s, int K, double huber, bool intrinsics_constant,
+                bool stacked = false) {
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem P(po);
     AddParameters(&P);
-    AddSamples<R>(&P, s, K, huber);
+    AddSamples<R>(&P, s, K, huber, stacked);
     if (intrinsics_constant) {
       for (double* b : {imu_.Dw(), imu_.Da(), imu_.Tg(), imu_.q_rotation(), gyro_.Dw()}) {
         if (b != nullptr)
@@ -254,9 +259,11 @@ class InertialBlockTest : public ::testing::Test {
         eo.parameter_blocks.push_back(b);  // the same columns in both problems
     }
     Eval e;
-    std::vector<double> g;
+    std::vector<double> g, residuals;
     ceres::CRSMatrix crs;
-    EXPECT_TRUE(P.Evaluate(eo, &e.cost, nullptr, &g, &crs));
+    EXPECT_TRUE(P.Evaluate(eo, &e.cost, &residuals, &g, &crs));
+    e.residuals = Eigen::Map<const Eigen::VectorXd>(residuals.data(),
+                                                    static_cast<Eigen::Index>(residuals.size()));
     e.gradient = Eigen::Map<const Eigen::VectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
     for (int r = 0; r < crs.num_rows; ++r) {
@@ -264,6 +271,7 @@ class InertialBlockTest : public ::testing::Test {
         J(r, crs.cols[i]) = crs.values[i];
     }
     e.H = J.transpose() * J;
+    e.J = std::move(J);
     return e;
   }
 
@@ -286,6 +294,24 @@ class InertialBlockTest : public ::testing::Test {
     EXPECT_LT(testing::MaxAbs(diff), 1e-9);
     EXPECT_LT(testing::MaxAbs(a.H.diagonal() - b.H.diagonal()),
               1e-9 * testing::MaxAbs(a.H.diagonal()));
+  }
+
+  template <class R>
+  void ExpectStackedSame(const Samples<R>& s, const char* what) {
+    for (const int K : {1, 3}) {
+      for (const bool constant : {false, true}) {
+        SCOPED_TRACE(std::string(what) + " K " + std::to_string(K) +
+                     (constant ? " intrinsics constant" : ""));
+        const Eval a = Evaluate<R>(s, 0, 0.0, constant);
+        const Eval b = Evaluate<R>(s, K, 0.0, constant, true);
+        ASSERT_EQ(a.residuals.size(), b.residuals.size());
+        ASSERT_EQ(a.J.rows(), b.J.rows());
+        ASSERT_EQ(a.J.cols(), b.J.cols());
+        EXPECT_EQ(testing::MaxAbs(a.residuals - b.residuals), 0.0);
+        EXPECT_EQ(testing::MaxAbs(a.J - b.J), 0.0);
+        EXPECT_NEAR(b.cost, a.cost, 1e-12 * a.cost);
+      }
+    }
   }
 
   Samples<Base> BaseSamples() {
@@ -358,6 +384,27 @@ TEST(InertialBlockSegmentsTest, CompressesOneKilohertzNotTheDemoRate) {
   EXPECT_LE(at_1k, 16);
   EXPECT_EQ(InertialBlockSegments(7.25, 6, 4, 40, 39), 0);
   EXPECT_EQ(InertialBlockSegments(5.8, 3, 4, 12, 11), 0);  // the 200 Hz gyro
+}
+
+// The stacked form hands Ceres the per-sample blocks' rows themselves: residuals and Jacobian
+// equal to the last bit (same functions, same order), so the cost and the normal equations differ
+// only by the summation order; runs of 1 and 3 segments (K > 1: knots a sample does not touch are
+// zero columns), intrinsics free and constant.
+TYPED_TEST(InertialBlockTest, StackedBlocksHoldThePerSampleRowsExactly) {
+  this->ExpectStackedSame(this->BaseSamples(), Name(Kind::kBaseImu));
+  this->ExpectStackedSame(this->AuxImuSamples(), Name(Kind::kAuxImu));
+  this->ExpectStackedSame(this->AuxGyroSamples(), Name(Kind::kAuxGyro));
+}
+
+TEST(InertialBlockStackedTest, RefusesARobustLoss) {
+  using R = BaseImuResidual<4, Se3Representation::kSplit, 2>;
+  ImuSampleSetup setup;
+  std::vector<R::Functor> samples;
+  samples.emplace_back(setup);
+  const std::vector<int> sizes = R::BlockSizes(setup.layout);
+  const std::vector<const ceres::Manifold*> manifolds(sizes.size() - R::kNumTrajBlocks, nullptr);
+  EXPECT_THROW(InertialBlockResidual<R>(samples, {0}, 1, sizes, manifolds, 3.0, true),
+               std::invalid_argument);
 }
 
 }  // namespace

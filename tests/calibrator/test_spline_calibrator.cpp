@@ -94,18 +94,29 @@ TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
     EXPECT_LT(o.removed, o.corners / 200) << o.camera;
 }
 
-// The stop criterion of the plain solves (SplineCalibratorOptions::stop_cost_change) bounds every
-// estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1 of its sigma; the run
-// without it (Ceres' relative tolerances of 1e-10 only) is the reference.
-TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate) {
+// The 12 s recording (seed 11) calibrated with the default options (`fast`) and with `change`
+// applied to them (`ref`): the pairs the tests below compare.
+struct FastAndReference {
+  SplineCalibrationResult fast, ref;
+};
+template <class Change>
+FastAndReference CalibrateFastAndReference(Change&& change) {
   const test::Recording l = test::LoadRecording(SimulatedData(11, 12.0));
   SplineCalibratorOptions options;
   options.threads = 2;
   options.report_data = false;
-  SplineCalibratorOptions converged = options;
-  converged.stop_cost_change = 0.0;
-  const SplineCalibrationResult fast = CalibrateSpline(l.rig, l.data, options, Quiet());
-  const SplineCalibrationResult ref = CalibrateSpline(l.rig, l.data, converged, Quiet());
+  SplineCalibratorOptions reference = options;
+  change(&reference);
+  return {CalibrateSpline(l.rig, l.data, options, Quiet()),
+          CalibrateSpline(l.rig, l.data, reference, Quiet())};
+}
+
+// The stop criterion of the plain solves (SplineCalibratorOptions::stop_cost_change) bounds every
+// estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1 of its sigma; the run
+// without it (Ceres' relative tolerances of 1e-10 only) is the reference.
+TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate) {
+  const auto [fast, ref] =
+      CalibrateFastAndReference([](SplineCalibratorOptions* o) { o->stop_cost_change = 0.0; });
   EXPECT_LE(fast.iterations, ref.iterations);
   // error = fast - reference, sigma = fast's; cam1's undetermined k2..k4 have none (see above).
   ASSERT_EQ(CompareRigs(ref.result, fast.result).summary.count, 98);
@@ -113,6 +124,27 @@ TEST(SplineCalibrator, StopCriterionStaysWithinATenthSigmaOfTheConvergedEstimate
   EXPECT_GE(a.compared, 95);
   std::printf("stop criterion: %d vs %d iterations, worst |fast - converged| %.4f sigma\n",
               fast.iterations, ref.iterations, a.worst);
+}
+
+// docs/performance.md step 7b's speed-ups (stacked inertial blocks at the 200-300 Hz rates, the
+// robust solve's predicted stop) against the pipeline without them: the same corners gated out
+// and every estimate within 0.01 sigma (the stacked blocks hold the per-sample rows to the bit;
+// the robust solve ends at the point Ceres' function tolerance would have kept).
+TEST(SplineCalibrator, SpeedUpsKeepTheOutliersAndTheEstimates) {
+  const auto [fast, ref] = CalibrateFastAndReference([](SplineCalibratorOptions* o) {
+    o->stacked_inertial_segments = 0;
+    o->robust_early_stop = false;
+  });
+  ASSERT_EQ(fast.outliers.size(), ref.outliers.size());
+  for (std::size_t i = 0; i < ref.outliers.size(); ++i) {
+    EXPECT_EQ(fast.outliers[i].corners, ref.outliers[i].corners) << ref.outliers[i].camera;
+    EXPECT_EQ(fast.outliers[i].removed, ref.outliers[i].removed) << ref.outliers[i].camera;
+  }
+  EXPECT_LE(fast.iterations, ref.iterations);
+  const Agreement a = ExpectAgreement(ref.result, fast.result, 0.01);
+  EXPECT_GE(a.compared, 95);
+  std::printf("speed-ups: %d vs %d iterations, worst |fast - before| %.2e sigma\n", fast.iterations,
+              ref.iterations, a.worst);
 }
 
 // CalibrateSpline taking the data over releases the loaded corners once it has selected its own

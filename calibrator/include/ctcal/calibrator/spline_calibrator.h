@@ -54,10 +54,15 @@ struct SplineCalibratorOptions {
   bool compress_frames = true;
   // Inertial samples as one compressed block per sensor and run of spline segments (analytic path
   // only; inertial_block_residual.h) where that at least halves Ceres' J^T J work (1 kHz IMUs, not
-  // the 200-300 Hz sensors of the demo); false: one block per sample. inertial_block_segments > 0
-  // forces that run length on every inertial sensor (benchmarks and tests).
+  // the 200-300 Hz sensors of the demo); false: one block per sample everywhere (no stacked
+  // blocks either). inertial_block_segments > 0 forces that run length on every inertial sensor
+  // (benchmarks and tests).
   bool compress_inertial = true;
   int inertial_block_segments = 0;
+  // Where the compression does not pay (the demo's rates), the samples of a run of
+  // `stacked_inertial_segments` segments as one uncompressed block (the same rows: fewer blocks
+  // for Ceres' per-block work; inertial_block_residual.h); 0: one block per sample there.
+  int stacked_inertial_segments = 1;
   int threads = 0;  // 0 = every core
   int max_iterations = 50;
   // Huber threshold on the norm of a whitened corner residual during the robust solve.
@@ -73,6 +78,10 @@ struct SplineCalibratorOptions {
   // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. 0: Ceres'
   // relative tolerances of 1e-10 alone (the fully converged reference).
   double stop_cost_change = 0.005;
+  // The robust solve stops once the next step is predicted to lower the cost by < 1e-4 of it
+  // (spline_problem_impl.h RobustStageStop) instead of computing that step; false: Ceres'
+  // relative function tolerance of 1e-6 alone.
+  bool robust_early_stop = true;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.

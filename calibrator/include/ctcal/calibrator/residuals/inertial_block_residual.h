@@ -31,6 +31,14 @@
 // evaluation, as Ceres' per-block HuberLoss does with its corrector when rho'' <= 0), and
 // sum_i rho(s_i) - rho'(s_i) s_i >= 0 is added to last^2, so ||r||^2 = sum rho(s_i).
 //
+// Stacked form (`stacked`, plain L2 only): where the factor would have more rows than the samples
+// (the demo's 200-300 Hz sensors: 7 base-IMU samples per 0.029 s segment are 44 rows, the factor
+// ~58), the block returns the samples' own whitened residuals and ambient Jacobians one under the
+// other, r = [e_1; ...; e_M]: the per-sample blocks' rows exactly, in one block. What it saves is
+// Ceres' per-block work, not flops: its J^T J makes one product term per pair of a block's
+// parameter blocks (~120 per base-IMU sample, sorted once per solve), and evaluates, checks and
+// scales every block on its own (docs/performance.md step 7b).
+//
 // Residual-only evaluations (jacobians == nullptr, Ceres' candidate steps) skip the factorisation
 // and return r = [0; sqrt(c)]: the same cost, but a residual vector is only meaningful together
 // with its Jacobian. Per-sample whitened residuals (statistics) come from the samples' own
@@ -114,20 +122,24 @@ class InertialBlockResidual final : public ceres::CostFunction {
   // blocks after the trajectory's are shared by every sample); common_manifolds: the manifold of
   // each of those shared blocks whose residual Jacobian is lifted from its tangent with
   // MinusJacobian (the left rotations), nullptr for the others (Euclidean blocks, and gravity,
-  // whose Jacobian is the plain ambient one); huber_threshold 0: plain L2.
+  // whose Jacobian is the plain ambient one); huber_threshold 0: plain L2; stacked: the samples'
+  // rows uncompressed (file comment; L2 only).
   InertialBlockResidual(std::vector<Functor> samples, std::vector<std::uint8_t> offsets,
                         int num_segments, const std::vector<int>& sample_sizes,
                         const std::vector<const ceres::Manifold*>& common_manifolds,
-                        double huber_threshold)
+                        double huber_threshold, bool stacked = false)
       : samples_(std::move(samples)),
         offsets_(std::move(offsets)),
         num_segments_(num_segments),
         sample_sizes_(sample_sizes),
-        huber_(huber_threshold) {
+        huber_(huber_threshold),
+        stacked_(stacked) {
     const int num_common = static_cast<int>(sample_sizes.size()) - kNumTrajBlocks;
     if (samples_.empty() || samples_.size() != offsets_.size() || num_segments < 1 ||
         num_common < 0 || static_cast<int>(common_manifolds.size()) != num_common)
       throw std::invalid_argument("InertialBlockResidual: inconsistent samples/offsets/blocks");
+    if (stacked && huber_threshold > 0.0)
+      throw std::invalid_argument("InertialBlockResidual: the stacked form is plain L2 only");
     for (std::size_t i = 0; i < offsets_.size(); ++i) {
       if (offsets_[i] >= num_segments || (i > 0 && offsets_[i] < offsets_[i - 1]))
         throw std::invalid_argument("InertialBlockResidual: sample " + std::to_string(i) +
@@ -151,7 +163,8 @@ class InertialBlockResidual final : public ceres::CostFunction {
     }
     num_cols_ = col;
     num_factor_rows_ = tan;
-    set_num_residuals(num_factor_rows_ + 1);
+    set_num_residuals(stacked_ ? kSampleRows * static_cast<int>(samples_.size())
+                               : num_factor_rows_ + 1);
     *mutable_parameter_block_sizes() = sizes;
     sample_col_.push_back(0);
     for (const int s : sample_sizes_)
@@ -170,19 +183,16 @@ class InertialBlockResidual final : public ceres::CostFunction {
   }
 
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+    if (stacked_)
+      return EvaluateStacked(p, residuals, jacobians);
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     const int num_sample_blocks = static_cast<int>(sample_sizes_.size());
     const int num_blocks = static_cast<int>(block_col_.size());
-    const int knots = N + num_segments_ - 1;
     const int n = num_factor_rows_;  // tangent columns
     std::vector<const double*> ps(static_cast<std::size_t>(num_sample_blocks));
     std::vector<double*> js(static_cast<std::size_t>(num_sample_blocks));
     std::vector<RowMajor> J_b(static_cast<std::size_t>(num_sample_blocks));
-    // The block of sample block b for a sample on segment offset `off`.
-    const auto union_block = [&](int b, int off) {
-      return b < kNumTrajBlocks ? (b / N) * knots + off + b % N
-                                : kGroups * knots + (b - kNumTrajBlocks);
-    };
+    const auto union_block = [this](int b, int off) { return UnionBlock(b, off); };
     const bool want = jacobians != nullptr;
     // PlusJacobian of every manifold block (file comment: the stacking is in the tangent).
     std::vector<RowMajor> plus(static_cast<std::size_t>(num_blocks));
@@ -286,6 +296,46 @@ class InertialBlockResidual final : public ceres::CostFunction {
   }
 
  private:
+  // The block's block of sample block b for a sample on segment offset `off`.
+  int UnionBlock(int b, int off) const {
+    const int knots = N + num_segments_ - 1;
+    return b < kNumTrajBlocks ? (b / N) * knots + off + b % N
+                              : kGroups * knots + (b - kNumTrajBlocks);
+  }
+
+  // The stacked form (file comment): every sample writes its residual and ambient Jacobian rows
+  // straight into the block's (a sample's rows of block u are contiguous in the row-major
+  // Jacobian, whose width is that block's size); the knots a sample does not touch stay zero.
+  bool EvaluateStacked(double const* const* p, double* residuals, double** jacobians) const {
+    const int num_sample_blocks = static_cast<int>(sample_sizes_.size());
+    if (jacobians != nullptr && num_segments_ > 1) {
+      for (std::size_t u = 0; u < block_col_.size(); ++u) {
+        if (jacobians[u] != nullptr)
+          std::fill_n(jacobians[u],
+                      static_cast<std::size_t>(num_residuals()) *
+                          static_cast<std::size_t>(parameter_block_sizes()[u]),
+                      0.0);
+      }
+    }
+    std::vector<const double*> ps(static_cast<std::size_t>(num_sample_blocks));
+    std::vector<double*> js(static_cast<std::size_t>(num_sample_blocks));
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      const int off = offsets_[i];
+      const std::ptrdiff_t row = kSampleRows * static_cast<std::ptrdiff_t>(i);
+      for (int b = 0; b < num_sample_blocks; ++b) {
+        const int u = UnionBlock(b, off);
+        ps[static_cast<std::size_t>(b)] = p[u];
+        js[static_cast<std::size_t>(b)] = jacobians != nullptr && jacobians[u] != nullptr
+                                              ? jacobians[u] + row * sample_sizes_[b]
+                                              : nullptr;
+      }
+      if (!Sample::Analytic::EvaluateSample(samples_[i], ps.data(), residuals + row,
+                                            jacobians != nullptr ? js.data() : nullptr))
+        return false;
+    }
+    return true;
+  }
+
   std::vector<Functor> samples_;
   std::vector<std::uint8_t> offsets_;
   int num_segments_;
@@ -297,6 +347,7 @@ class InertialBlockResidual final : public ceres::CostFunction {
   int num_cols_ = 0;
   int num_factor_rows_ = 0;
   double huber_;
+  bool stacked_;
 };
 
 }  // namespace ctcal
