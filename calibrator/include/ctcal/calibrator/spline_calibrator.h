@@ -52,6 +52,10 @@ struct SplineCalibratorOptions {
   // Global-shutter corners as one compressed block per frame (analytic path only); false: one
   // block per corner (for benchmarks and tests of the compression).
   bool compress_frames = true;
+  // A compressed frame whose intrinsics are estimated as two residual blocks, its pose rows over
+  // every block and its intrinsic rows over the intrinsics only (frame_corners_residual.h): the
+  // frames' Jacobian in Ceres 48 % smaller (10 min at 2 x 20 Hz: -54 MB).
+  bool split_frame_rows = true;
   // Inertial samples as one compressed block per sensor and run of spline segments (analytic path
   // only; inertial_block_residual.h) where that at least halves Ceres' J^T J work (1 kHz IMUs, not
   // the 200-300 Hz sensors of the demo); false: one block per sample everywhere (no stacked
