@@ -559,6 +559,11 @@ SplineCalibrationResult Calibrate(const RigConfig& rig,
             : RunPipeline<6, Se3Representation::kJoint>(&prep, options, log, &out);
       break;
   }
+  // The prepared corners and samples are done with: returned to the system before the caller
+  // renders the report (10 min at 1 kHz: freed but still resident, they made the report's
+  // rendering the command's peak; docs/performance.md step 7e).
+  prep = Prepared();
+  ReleaseFreedMemory();
   if (motion)
     CompleteObservability(*motion, &out.result, log, &out.warnings);
   out.total_seconds =
