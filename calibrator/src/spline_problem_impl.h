@@ -614,7 +614,10 @@ class SplineProblem {
     SensorState& s = *cam->state;
     // The split halves only where the intrinsic rows have a free block (a block of constant
     // blocks only would be evaluated once, at the start, as Ceres' fixed cost).
-    const bool split = options_.split_frame_rows && s.config.Estimates(EstimateItem::kIntrinsics);
+    const bool many =
+        static_cast<int>(cam->views.size()) > SplineCalibratorOptions::kSplitFrameRowsAbove;
+    const bool split = (options_.split_frame_rows > 0 || (options_.split_frame_rows < 0 && many)) &&
+                       s.config.Estimates(EstimateItem::kIntrinsics);
     ForEachFrame(*cam, [&](std::size_t first, std::size_t last) {
       if (!AnyLeft(*cam, first, last))
         return;
