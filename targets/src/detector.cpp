@@ -120,10 +120,15 @@ double EstimateNoiseSigma(const cv::Mat& gray) {
 // X-junction is from the ideal one, symmetric misfit that does not move q: 7x the scatter.)
 namespace {
 // The corner itself at least this far inside the image (px), and at least this fraction of the
-// window's weight on measured gradients: a corner 4 px from the border (Kalibr's bound) keeps
-// ~75 % of its window, one in the image's corner ~55 %.
+// window's weight on measured gradients: a corner 4 px from the border (Kalibr's bound) keeps the
+// band of rows or columns within 3 px of it, 40 % of a 12 px window's weight.
 constexpr double kRefineMinBorderPx = 2.0;
 constexpr double kRefineMinMeasuredWeight = 0.25;
+// The window of the tag corners' refinement during detection, in black borders: its capture range
+// brings a start a pixel or two off (libapriltag's straight-edge quads, the grid completion's
+// extrapolations on blurred fisheye rims) onto the junction. The final estimate comes from
+// DetectorOptions::tag_window_borders (Detector::RefineTagCorners).
+constexpr double kCaptureWindowBorders = 0.8;
 }  // namespace
 
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
@@ -665,11 +670,11 @@ std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
   return offsets;
 }
 
-// Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
-// is the black border's width (and the corner square); the window stays inside it, and is at
-// least Kalibr's 5 x 5.
-int TagCornerHalfWindow(int black_border, double bit_px) {
-  return std::clamp(static_cast<int>(0.8 * black_border * bit_px), 2, 12);
+// Half-width of a tag corner's refinement window: `borders` black borders of the tag's shortest
+// edge (the clean neighbourhood of the junction is the border's width and the corner square),
+// at least Kalibr's 5 x 5.
+int TagCornerHalfWindow(int black_border, double bit_px, double borders) {
+  return std::clamp(static_cast<int>(borders * black_border * bit_px), 2, 12);
 }
 
 // The tags whose four corners are all among `corners`.
@@ -807,7 +812,6 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
       const double bit_px = edge / cells;
       if (!(bit_px >= options.min_bit_px))
         continue;
-      const int half_window = TagCornerHalfWindow(border, bit_px);
       std::array<DetectedCorner, 4> refined;
       std::array<Eigen::Vector2d, 4> uv;
       // Refines the four corners from `starts` and reads the tag there.
@@ -816,7 +820,9 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
         for (size_t k = 0; k < 4 && ok; ++k) {
           uv[k] = starts[k];
           double sigma = 0.0;
-          ok = inside(starts[k]) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
+          ok = inside(starts[k]) &&
+               RefineCorner(gray, TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders),
+                            &uv[k], &sigma, noise_sigma) &&
                (uv[k] - starts[k]).norm() <= bit_px && inside(uv[k]);
           refined[k].id = ids[k];
           refined[k].uv = uv[k];
@@ -1101,11 +1107,58 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
       break;
   }
   if (options_.refine && result.board_found) {
+    if (board_.type() == TargetType::kAprilGrid)
+      RefineTagCorners(gray, noise_sigma, &result);
     if (options_.rectify)
       RefineRectified(gray, noise_sigma, &result);
     AddModelError(&result);
   }
   return result;
+}
+
+// Every accepted tag corner refined once more from its estimate with the final window
+// (DetectorOptions::tag_window_borders, smaller than the capture window): the lens' outward pull
+// grows with the window's area while the noise only falls with its width (docs/targets.md). The
+// detection's decisions (completion, code and edge checks, the grid scatter) all rest on the
+// capture window's corners, as before: on TUM-VI's blurred fisheye rim the final window's corners
+// differ by up to 0.3 px, which the grid completion's line extrapolation amplifies 7-fold. A
+// corner the final window moves by more than that keeps its capture estimate.
+void Detector::RefineTagCorners(const cv::Mat& gray, double noise_sigma,
+                                DetectionResult* result) const {
+  constexpr double kMaxMovePx = 0.3;
+  const int border = board_.config().black_tag_border;
+  const int cells = 6 + 2 * border;
+  std::vector<DetectedCorner>& corners = result->corners;  // sorted by id
+  const auto find = [&](int id) -> DetectedCorner* {
+    const auto it = std::lower_bound(corners.begin(), corners.end(), id,
+                                     [](const DetectedCorner& c, int key) { return c.id < key; });
+    return it != corners.end() && it->id == id ? &*it : nullptr;
+  };
+  for (int tag = 0; tag < board_.NumTags(); ++tag) {
+    const std::array<int, 4> ids = board_.TagCornerIds(tag);
+    std::array<DetectedCorner*, 4> c{};
+    bool whole = true;
+    for (size_t k = 0; k < 4; ++k)
+      whole &= (c[k] = find(ids[k])) != nullptr;
+    if (!whole)
+      continue;
+    double edge = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < 4; ++k)
+      edge = std::min(edge, (c[k]->uv - c[(k + 1) % 4]->uv).norm());
+    const double bit_px = edge / cells;
+    const int fine = TagCornerHalfWindow(border, bit_px, options_.tag_window_borders);
+    if (fine == TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders))
+      continue;
+    for (DetectedCorner* corner : c) {
+      Eigen::Vector2d uv = corner->uv;
+      double sigma = 0.0;
+      if (RefineCorner(gray, fine, &uv, &sigma, noise_sigma) &&
+          (uv - corner->uv).norm() <= kMaxMovePx) {
+        corner->uv = uv;
+        corner->sigma = sigma;
+      }
+    }
+  }
 }
 
 // The refinement's sigma propagates image noise only. The corners of a view also carry errors
@@ -1181,7 +1234,6 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         result.rejected.push_back({tag.id, RejectReason::kTooSmall});
         continue;
       }
-      const int half_window = TagCornerHalfWindow(board_.config().black_tag_border, bit_px);
       // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
       // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
       // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
@@ -1196,7 +1248,10 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         if (!options_.refine)
           continue;
         double sigma = 0.0;
-        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma, noise_sigma) ||
+        if (!RefineCorner(gray,
+                          TagCornerHalfWindow(board_.config().black_tag_border, bit_px,
+                                              kCaptureWindowBorders),
+                          &refined[k].uv, &sigma, noise_sigma) ||
             (refined[k].uv - tag.corners[k]).norm() > max_jump) {
           ok = false;
           break;
