@@ -50,7 +50,7 @@ struct DetectorOptions {
   // proportion to the window's area (0.005-0.009 px at mid-field with 0.8, the same in every
   // view), while the noise grows only as one over the window's width: with 0.5 the corners'
   // error is ~20 % larger, the pull half as large, and images-only calibrations end with their
-  // camera parameters within 3 sigma of the truth instead of 3-5.6 sigma off (docs/targets.md).
+  // camera parameters within 3 sigma of the truth instead of 3-6.5 sigma off (docs/targets.md).
   double tag_window_borders = 0.5;
   // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
   // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
