@@ -179,7 +179,9 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 
 // Refines an X-junction or a corner near `uv` by the gradient-orthogonality condition (every
 // image gradient in a window is orthogonal to the vector from the corner to its pixel), weighted
-// by a Gaussian; the window shrinks near the image border. Returns false if it does not converge.
+// by a Gaussian; near the image border the window keeps its size and leaves out the pixels whose
+// gradient is not measured and their mirror images through the corner (the corner must stay 2 px
+// inside and keep a quarter of the window's weight). Returns false if it does not converge.
 // `sigma_px` (optional): the estimate's standard deviation per coordinate caused by white image
 // noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
 //
