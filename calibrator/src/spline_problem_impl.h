@@ -38,7 +38,7 @@ using residual_internal::Jacobian;
 #include "ctcal/spline/so3.h"
 #include "ctcal/spline/so3_manifold.h"
 #include "ctcal/targets/board.h"
-#include "parallel_for.h"
+#include "ctcal/sensors/parallel_for.h"
 #include "spline_trajectory_fit.h"
 
 namespace ctcal {
