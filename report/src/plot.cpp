@@ -17,6 +17,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace ctcal::report {
@@ -248,10 +249,17 @@ class DotRaster {
     reach_ = static_cast<int>(std::ceil(r + 0.5));
     const int side = 2 * reach_ + 1;
     mask_.resize(static_cast<size_t>(side) * side);
+    span_.assign(static_cast<size_t>(side), {0, -1});
     for (int dy = -reach_; dy <= reach_; ++dy) {
+      auto& [first, last] = span_[static_cast<size_t>(dy + reach_)];
       for (int dx = -reach_; dx <= reach_; ++dx) {
-        mask_[static_cast<size_t>(dy + reach_) * side + (dx + reach_)] = static_cast<std::uint8_t>(
+        const auto m = static_cast<std::uint8_t>(
             255.0 * std::clamp(r + 0.5 - std::hypot(dx, dy), 0.0, 1.0) + 0.5);
+        mask_[static_cast<size_t>(dy + reach_) * side + (dx + reach_)] = m;
+        if (m != 0) {
+          first = std::min(first, dx);
+          last = dx;
+        }
       }
     }
   }
@@ -269,16 +277,23 @@ class DotRaster {
       return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
     };
     const std::uint32_t alpha = channel(c.a), r = channel(c.r), g = channel(c.g), b = channel(c.b);
+    const std::uint32_t opaque = 0xff000000u | (r << 16) | (g << 8) | b;
     for (int dy = -reach_; dy <= reach_; ++dy) {
       const int py = cy + dy;
       if (py < 0 || py >= h_)
         continue;
       auto* row = reinterpret_cast<std::uint32_t*>(data_ + static_cast<size_t>(py) * stride_);
       const std::uint8_t* m = &mask_[static_cast<size_t>(dy + reach_) * side];
-      for (int dx = -reach_; dx <= reach_; ++dx) {
+      // Only the disc's own pixels of this row (the mask is 0 outside [first, last]).
+      const auto [first, last] = span_[static_cast<size_t>(dy + reach_)];
+      for (int dx = std::max(first, -cx); dx <= std::min(last, w_ - 1 - cx); ++dx) {
         const int px = cx + dx;
         const std::uint32_t a = (alpha * m[dx + reach_] + 127) / 255;
-        if (px < 0 || px >= w_ || a == 0)
+        if (a == 255) {  // "over" with full coverage is the source itself
+          row[px] = opaque;
+          continue;
+        }
+        if (a == 0)
           continue;
         // Premultiplied ARGB32 "over": out = src a + (1 - a) dst, per 8-bit channel.
         const std::uint32_t d = row[px];
@@ -308,17 +323,57 @@ class DotRaster {
   unsigned char* data_ = nullptr;
   int stride_ = 0;
   int reach_ = 0;
-  std::vector<std::uint8_t> mask_;  // disc coverage, 0..255
+  std::vector<std::uint8_t> mask_;         // disc coverage, 0..255
+  std::vector<std::pair<int, int>> span_;  // per mask row, the dx range of non-zero coverage
 };
 
-// A line of many more points than half-points across (XYPlot::Draw): per half-point column one
-// bar from the lowest to the highest point, reaching back to the previous column's last point
-// so that the line stays connected; `width` thick like the stroke. NaN breaks the line.
+// A line of many more points than half-points across (XYPlot::Draw), drawn as the band it
+// covers: per half-point column the lowest and the highest point, reaching back to the previous
+// column's last point so that the line stays connected, `width` thick like the stroke. The band's
+// upper edge runs through the columns' centres at the highest point of the column and its two
+// neighbours (a one-column spike keeps a flat top as wide as a stroke's cap instead of thinning to
+// a needle), its lower edge back likewise: one polygon per run, two points per column on a PDF
+// page instead of a rectangle. NaN breaks the line.
 template <typename AxesT>
 void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
                    const std::vector<double>& y, double width) {
   const size_t n = std::min(x.size(), y.size());
   const double half = 0.5 * width;
+  struct Column {
+    double index, top, bottom;
+  };
+  std::vector<Column> run;
+  std::vector<double> upper, lower;  // the band's edges per column
+  const auto fill_run = [&]() {
+    if (run.empty())
+      return;
+    const size_t m = run.size();
+    upper.resize(m);
+    lower.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+      upper[i] = run[i].top;
+      lower[i] = run[i].bottom;
+      for (const size_t j : {i - 1, i + 1}) {  // i - 1 wraps to a huge index at i = 0
+        if (j < m && std::abs(run[j].index - run[i].index) == 1.0) {
+          upper[i] = std::min(upper[i], run[j].top);
+          lower[i] = std::max(lower[i], run[j].bottom);
+        }
+      }
+    }
+    const auto centre = [&](size_t i) { return 0.5 * run[i].index + 0.25; };
+    // The ends reach out like the stroke's (to the outer columns' bars' edges).
+    const double x0 = centre(0) - 0.25 - 0.5 * half, x1 = centre(m - 1) + 0.25 + 0.5 * half;
+    cairo_move_to(cr, x0, upper[0]);
+    for (size_t i = 0; i < m; ++i)
+      cairo_line_to(cr, centre(i), upper[i]);
+    cairo_line_to(cr, x1, upper[m - 1]);
+    cairo_line_to(cr, x1, lower[m - 1]);
+    for (size_t i = m; i-- > 0;)
+      cairo_line_to(cr, centre(i), lower[i]);
+    cairo_line_to(cr, x0, lower[0]);
+    cairo_close_path(cr);
+    run.clear();
+  };
   bool open = false, have_prev = false;
   double column = 0.0, lo = 0.0, hi = 0.0, last = 0.0, prev_last = 0.0;
   const auto flush = [&]() {
@@ -329,7 +384,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
       top = std::min(top, prev_last);
       bottom = std::max(bottom, prev_last);
     }
-    cairo_rectangle(cr, 0.5 * column - half * 0.5, top - half, 0.5 + half, bottom - top + width);
+    run.push_back({column, top - half, bottom + half});
     prev_last = last;
     have_prev = true;
     open = false;
@@ -337,6 +392,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
   for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
       flush();
+      fill_run();
       have_prev = false;
       continue;
     }
@@ -355,6 +411,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
     last = dy;
   }
   flush();
+  fill_run();
   cairo_fill(cr);
 }
 
@@ -602,10 +659,10 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
             cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           pen = true;
         };
-        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as one filled bar
-        // per half-point column from its lowest to its highest point, joined to the previous
-        // column's last point: the picture of the stroke (spikes kept) without stroking
-        // thousands of overlapping zigzag segments, which cost cairo ~1 s per PNG.
+        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as the filled band
+        // of its half-point columns' lowest and highest points, joined to the previous column's
+        // last point: the picture of the stroke (spikes kept) without stroking thousands of
+        // overlapping zigzag segments, which cost cairo ~1 s per PNG.
         const bool thin = s.kind == Series::Kind::kLine && static_cast<double>(n) > 4 * p.w;
         if (thin) {
           DrawDenseLine(cr, ax, s.x, s.y, s.width);
@@ -624,7 +681,7 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
       case Series::Kind::kScatter: {
         // Up to kVectorDots dots are vector circles. Beyond, cairo's per-dot fill (a minute's
         // recording has 170k corners per camera: 3.5 s per drawing) is replaced by stamping an
-        // anti-aliased disc into an image (the PNG's pixels, 2.5 px per pt on a PDF page), later
+        // anti-aliased disc into an image (the PNG's pixels, 2 px per pt on a PDF page), later
         // dots over earlier ones as the vector path would draw them (same look, ~50 ms, a fixed
         // size in the PDF).
         constexpr size_t kVectorDots = 3000;
@@ -636,8 +693,10 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
           return c;
         };
         if (n > kVectorDots) {
-          // Image targets: their own resolution; vector pages: 2.5 px per pt (180 dpi).
-          double scale = 2.5;
+          // Image targets: their own resolution; vector pages: 2 px per pt (144 dpi: dots of
+          // radius >= 1.2 pt stay round; 64 % of the pixels of 2.5 px per pt, which cairo
+          // deflates at zlib's level 6 and the stamping fills).
+          double scale = 2.0;
           if (cairo_surface_get_type(cairo_get_target(cr)) == CAIRO_SURFACE_TYPE_IMAGE) {
             double ux = 1.0, uy = 0.0;
             cairo_user_to_device_distance(cr, &ux, &uy);

@@ -7,11 +7,15 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "ctcal/report/report.h"
 #include "ctcal/report/report_data.h"
@@ -396,6 +400,92 @@ TEST_F(ReportTest, PngDirOfABothFolderKeepsEachMethodsFigures) {
   for (const auto& e : fs::directory_iterator(png))
     EXPECT_TRUE(e.is_directory()) << e.path() << " at the top of --png-dir";
   EXPECT_NE(Slurp(png + "/spline/fig-trajectory.png"), Slurp(png + "/discrete/fig-trajectory.png"));
+}
+
+// WriteReportData returns the data as the files hold them: what LoadReportData reads back, to the
+// bit; the rounded columns hold printf's digits ("%.3f" for u, v, "%.7g" for the errors and the
+// bias rows), the others the exact values; a table longer than one gzip member (4 MiB of text)
+// reads back whole.
+TEST_F(ReportTest, WrittenDataAreWhatTheFilesHoldToTheBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> pixel(-50.0, 800.0), err(-3.0, 3.0);
+  const auto printf_value = [](const char* format, double x) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, format, x);
+    return std::strtod(buf, nullptr);
+  };
+  ReportData d;
+  std::vector<CornerResidual>& corners = d.corners["cam0"];
+  for (int i = 0; i < 80000; ++i) {  // ~5.6 MB of text: two gzip members
+    CornerResidual c;
+    c.t_ns = 1'000'000'000LL + 33'333'333LL * (i / 40);
+    c.frame = i / 40;
+    c.corner_id = i % 40;
+    c.u = pixel(rng);
+    c.v = i % 1000 == 0 ? 0.0005 : pixel(rng);  // a tie for "%.3f"
+    c.du = err(rng) * std::pow(10.0, -(i % 9));
+    c.dv = i == 7 ? std::numeric_limits<double>::quiet_NaN() : -0.0;
+    c.whitened = std::hypot(c.du, c.v);
+    c.outlier = i % 13 == 0;
+    corners.push_back(c);
+  }
+  BiasSample b{5, Eigen::Vector3d(1.23456789e-3, -2.5e-7, 1.0 / 3.0), Eigen::Vector3d(1, 2, 3)};
+  d.bias["imu0"].gyro.push_back(b);
+  d.gyro["imu0"].push_back({5, Eigen::Vector3d(0.1, 1.0 / 7.0, -3e-300), Eigen::Vector3d(1, 2, 3)});
+  d.trajectory.push_back({5, Eigen::Vector3d(0.1, 0.2, 1.0 / 3.0), Eigen::Quaterniond(1, 0, 0, 0)});
+  d.run_info = {{"command", "ctcal calibrate --out a,b"}};
+
+  const ReportData stored = WriteReportData(dir_, d, 2);
+  const ReportData read = LoadReportData(dir_, {"cam0", "imu0"}, 2);
+  const auto same = [](double x, double y) {
+    return std::memcmp(&x, &y, sizeof x) == 0 || (std::isnan(x) && std::isnan(y));
+  };
+  ASSERT_EQ(read.corners.at("cam0").size(), corners.size());
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const CornerResidual &s = stored.corners.at("cam0")[i], &r = read.corners.at("cam0")[i],
+                         &c = corners[i];
+    ASSERT_EQ(r.t_ns, c.t_ns);
+    ASSERT_EQ(r.frame, c.frame);
+    ASSERT_EQ(r.corner_id, c.corner_id);
+    ASSERT_EQ(r.outlier, c.outlier);
+    for (const auto& [sv, rv, want] :
+         {std::tuple{s.u, r.u, printf_value("%.3f", c.u)},
+          std::tuple{s.v, r.v, printf_value("%.3f", c.v)},
+          std::tuple{s.du, r.du, printf_value("%.7g", c.du)},
+          std::tuple{s.dv, r.dv, std::isnan(c.dv) ? c.dv : printf_value("%.7g", c.dv)},
+          std::tuple{s.whitened, r.whitened, printf_value("%.7g", c.whitened)}}) {
+      ASSERT_TRUE(same(sv, rv)) << "row " << i << ": " << sv << " written, " << rv << " read";
+      ASSERT_TRUE(same(rv, want)) << "row " << i << ": " << rv << " read, printf gives " << want;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(same(read.bias.at("imu0").gyro[0].b[k], printf_value("%.7g", b.b[k])));
+    EXPECT_TRUE(same(stored.bias.at("imu0").gyro[0].b[k], read.bias.at("imu0").gyro[0].b[k]));
+    EXPECT_TRUE(same(read.gyro.at("imu0")[0].meas[k], d.gyro.at("imu0")[0].meas[k]));
+    EXPECT_TRUE(same(read.trajectory[0].p_W_B[k], d.trajectory[0].p_W_B[k]));
+  }
+  EXPECT_EQ(read.run_info, d.run_info);
+}
+
+// `ctcal calibrate` renders the report from the data it has just written, `ctcal report` from the
+// folder: the same HTML, byte for byte.
+TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
+  test::MakeSyntheticOut(dir_);
+  std::vector<std::string> ignored;
+  std::vector<std::string> names;
+  for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
+    names.push_back(s.name);
+  ReportData data = LoadReportData(dir_, names);
+  for (CornerResidual& c : data.corners.at("cam0"))  // unrounded again: WriteReportData rounds
+    c.du += 1e-9;
+  const ReportData stored = WriteReportData(dir_, data, 2);
+  ReportOptions opt;
+  opt.ctcal_version = "test";
+  opt.pdf = false;
+  RenderReport(dir_, stored, opt);
+  const std::string from_memory = Slurp(dir_ + "/report.html");
+  RenderReport(dir_, opt);
+  EXPECT_EQ(from_memory, Slurp(dir_ + "/report.html"));
 }
 
 }  // namespace
