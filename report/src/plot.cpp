@@ -5,7 +5,7 @@
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
-#include <png.h>
+#include <libdeflate.h>
 
 #include <Eigen/Geometry>
 
@@ -1349,54 +1349,61 @@ cairo_surface_t* DrawImage(const Figure& figure, double scale) {
 
 namespace {
 
-void PngAppend(png_structp png, png_bytep data, png_size_t length) {
-  static_cast<std::string*>(png_get_io_ptr(png))
-      ->append(reinterpret_cast<const char*>(data), length);
+void AppendBigEndian(std::string* out, std::uint32_t v) {
+  for (const int shift : {24, 16, 8, 0})
+    out->push_back(static_cast<char>((v >> shift) & 0xffu));
 }
 
-[[noreturn]] void PngFail(png_structp png, png_const_charp message) {
-  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
-  png_longjmp(png, 1);
+// One PNG chunk: length, type, data, CRC-32 of type and data.
+void AppendChunk(std::string* out, const char* type, const char* data, std::size_t size) {
+  AppendBigEndian(out, static_cast<std::uint32_t>(size));
+  const std::size_t at = out->size();
+  out->append(type, 4);
+  out->append(data, size);
+  AppendBigEndian(out, libdeflate_crc32(0, out->data() + at, size + 4));
 }
 
-// 8-bit RGB PNG of an RGB24 surface. cairo's own writer uses zlib's default level 6, ~40 % of
-// the report's rendering time; level 2 with the "up" filter costs a quarter of that for files
-// ~15 % larger (plots are mostly flat colour).
+// 8-bit RGB PNG of an RGB24 surface, every row "up"-filtered (plots are mostly flat colour), the
+// image data one zlib stream by libdeflate at level 2: the size of zlib's level 2 (cairo's own
+// writer uses level 6, ~40 % of the report's rendering time) at a third of its time.
 std::string EncodePng(cairo_surface_t* surface) {
   const int w = cairo_image_surface_get_width(surface);
   const int h = cairo_image_surface_get_height(surface);
   const int stride = cairo_image_surface_get_stride(surface);
   const unsigned char* data = cairo_image_surface_get_data(surface);
-  std::string bytes, error;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngFail, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (png == nullptr || info == nullptr) {
-    png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("PNG encoding failed: out of memory");
-  }
-  std::vector<png_byte> row(static_cast<size_t>(w) * 3);
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("PNG encoding failed: " + error);
-  }
-  png_set_write_fn(png, &bytes, PngAppend, nullptr);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), 8,
-               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  png_set_compression_level(png, 2);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
-  png_write_info(png, info);
+  const std::size_t row_bytes = 1 + 3 * static_cast<std::size_t>(w);
+  std::vector<unsigned char> filtered(row_bytes * static_cast<std::size_t>(h));
+  std::vector<unsigned char> rgb(3 * static_cast<std::size_t>(w)), above(rgb.size(), 0);
   for (int y = 0; y < h; ++y) {
     const auto* px = reinterpret_cast<const std::uint32_t*>(data + static_cast<size_t>(y) * stride);
     for (int x = 0; x < w; ++x) {
-      row[3 * x] = static_cast<png_byte>((px[x] >> 16) & 0xffu);
-      row[3 * x + 1] = static_cast<png_byte>((px[x] >> 8) & 0xffu);
-      row[3 * x + 2] = static_cast<png_byte>(px[x] & 0xffu);
+      rgb[3 * x] = static_cast<unsigned char>((px[x] >> 16) & 0xffu);
+      rgb[3 * x + 1] = static_cast<unsigned char>((px[x] >> 8) & 0xffu);
+      rgb[3 * x + 2] = static_cast<unsigned char>(px[x] & 0xffu);
     }
-    png_write_row(png, row.data());
+    unsigned char* row = &filtered[static_cast<std::size_t>(y) * row_bytes];
+    row[0] = 2;  // "up": each byte minus the byte above it
+    for (std::size_t i = 0; i < rgb.size(); ++i)
+      row[1 + i] = static_cast<unsigned char>(rgb[i] - above[i]);
+    std::swap(rgb, above);
   }
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
+  libdeflate_compressor* compressor = libdeflate_alloc_compressor(2);
+  if (compressor == nullptr)
+    throw std::runtime_error("PNG encoding failed: out of memory");
+  std::string idat(libdeflate_zlib_compress_bound(compressor, filtered.size()), '\0');
+  const std::size_t packed = libdeflate_zlib_compress(compressor, filtered.data(), filtered.size(),
+                                                      idat.data(), idat.size());
+  libdeflate_free_compressor(compressor);
+  if (packed == 0)
+    throw std::runtime_error("PNG encoding failed: compression");
+  std::string bytes("\x89PNG\r\n\x1a\n", 8);
+  std::string header;
+  AppendBigEndian(&header, static_cast<std::uint32_t>(w));
+  AppendBigEndian(&header, static_cast<std::uint32_t>(h));
+  header += std::string("\x08\x02\x00\x00\x00", 5);  // 8 bits, RGB, deflate, filters, no interlace
+  AppendChunk(&bytes, "IHDR", header.data(), header.size());
+  AppendChunk(&bytes, "IDAT", idat.data(), packed);
+  AppendChunk(&bytes, "IEND", nullptr, 0);
   return bytes;
 }
 
