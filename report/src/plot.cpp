@@ -724,16 +724,31 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
         c.a = 0.18;
         SetColor(cr, c);
         const size_t m = std::min(n, s.y2.size());
+        // A band of many more points than half-points across (a 60 s envelope: 18000) keeps one
+        // point per half-point column and each edge's last: its edges are smooth curves or
+        // constants, and the PDF page would otherwise hold every sample twice.
+        const bool dense = static_cast<double>(m) > 4 * p.w;
+        double column = kNaN;
+        const auto skip = [&](size_t i, bool last) {
+          if (!dense || last)
+            return false;
+          const double here = std::floor(2.0 * ax.X(s.x[i]));
+          if (here == column)
+            return true;
+          column = here;
+          return false;
+        };
         bool any = false;
         for (size_t i = 0; i < m; ++i) {
-          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
+          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || skip(i, i + 1 == m))
             continue;
           any ? cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]))
               : cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           any = true;
         }
+        column = kNaN;
         for (size_t i = m; i-- > 0;) {
-          if (std::isfinite(s.x[i]) && std::isfinite(s.y2[i]))
+          if (std::isfinite(s.x[i]) && std::isfinite(s.y2[i]) && !skip(i, i == 0))
             cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y2[i]));
         }
         if (any)
