@@ -555,11 +555,11 @@ ReportData LoadReportData(const std::string& out_dir, const std::vector<std::str
   std::vector<BiasTrack> bias(n);
   std::vector<std::function<void()>> jobs;
   for (size_t i = 0; i < n; ++i) {
-    const std::string& s = sensors[i];
-    jobs.emplace_back([&, i] { corners[i] = ReadCornerResiduals(CornersPath(out_dir, s)); });
-    jobs.emplace_back([&, i] { gyro[i] = ReadInertialSamples(GyroPath(out_dir, s)); });
-    jobs.emplace_back([&, i] { accel[i] = ReadInertialSamples(AccelPath(out_dir, s)); });
-    jobs.emplace_back([&, i] { bias[i] = ReadBiasTrack(BiasPath(out_dir, s)); });
+    jobs.emplace_back(
+        [&, i] { corners[i] = ReadCornerResiduals(CornersPath(out_dir, sensors[i])); });
+    jobs.emplace_back([&, i] { gyro[i] = ReadInertialSamples(GyroPath(out_dir, sensors[i])); });
+    jobs.emplace_back([&, i] { accel[i] = ReadInertialSamples(AccelPath(out_dir, sensors[i])); });
+    jobs.emplace_back([&, i] { bias[i] = ReadBiasTrack(BiasPath(out_dir, sensors[i])); });
   }
   jobs.emplace_back([&] { d.trajectory = ReadTrajectory(TrajectoryPath(out_dir)); });
   jobs.emplace_back([&] { d.correlation = ReadCorrelation(CorrelationPath(out_dir)); });
