@@ -260,6 +260,7 @@ int RunCalibrate(int argc, char** argv) {
         DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log);
       }))
     return *failed;
+  const report::StageTime detection = clock.Lap("detection");
 
   // The configuration of the run, for the report.
   report::RunInfo run_info = CalibrateRunInfo(argc, argv);
@@ -303,8 +304,8 @@ int RunCalibrate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
-  log("time: " + report::FormatStageTime(calibration) + ", " +
-      report::FormatStageTime(clock.Lap("results")));
+  log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
+      ", " + report::FormatStageTime(clock.Lap("results")));
   run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
   run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
   WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, options.threads);
