@@ -148,6 +148,48 @@ TEST_F(ReportTest, MalformedDataNamesFileAndLine) {
   EXPECT_THROW(ReadCorrelation(CorrelationPath(dir_)), std::runtime_error);
 }
 
+// The readers (one pass over the text, cells as views, from_chars) take what they took before
+// (CRLF line ends, '+' and blanks before an integer as std::stoll took them, YAML's .nan and .inf)
+// and name the file and line of anything else with the same messages.
+TEST_F(ReportTest, ReadersKeepTheirInputsAndTheirMessages) {
+  fs::create_directories(ReportDataDir(dir_));
+  const std::string path = GyroPath(dir_, "imu0");
+  std::ofstream(path) << "#t_ns,meas_x,meas_y,meas_z,pred_x,pred_y,pred_z\r\n"
+                      << "+5,1,.nan,-.inf,1e-3,-0.0,2\r\n"
+                      << " 6,1,2,3,4,5,6\n\n";
+  const std::vector<InertialSample> rows = ReadInertialSamples(path);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].t_ns, 5);
+  EXPECT_TRUE(std::isnan(rows[0].meas.y()));
+  EXPECT_EQ(rows[0].meas.z(), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(rows[0].pred.x(), 1e-3);
+  EXPECT_EQ(rows[1].t_ns, 6);
+  const auto message = [&](const std::string& text) {
+    std::ofstream(path) << "#t_ns,meas_x,meas_y,meas_z,pred_x,pred_y,pred_z\n"
+                        << "1,1,2,3,4,5,6\n"
+                        << text;
+    try {
+      ReadInertialSamples(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("1.5,1,2,3,4,5,6\n"), path + ":3: '1.5' is not an integer");
+  EXPECT_EQ(message("2,1,2,3,4,5\n"), path + ":3: expected 7 columns, got 6");
+  EXPECT_EQ(message("2,1,2,3,4,5,6,\n"), path + ":3: expected 7 columns, got 8");
+  EXPECT_EQ(message("2,1,2,3,4,5,1e999x\n"), path + ":3: '1e999x' is not a number");
+  EXPECT_EQ(message("2,1,2,3,4,,6\n"), path + ":3: '' is not a number");
+  const std::string corners = CornersPath(dir_, "cam0");
+  std::ofstream(corners) << "1,0,0,1,2,3,4,5,2\n";
+  try {
+    ReadCornerResiduals(corners);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), corners + ":1: outlier must be 0 or 1, got 2");
+  }
+}
+
 TEST(ReportChecks, CoverageCountsInlierCells) {
   std::vector<CornerResidual> c;
   auto at = [&](double u, double v, bool outlier) {
