@@ -50,7 +50,10 @@ bool RefinePoseOnPlane(const std::vector<cv::Point3d>& object,
                        const std::vector<cv::Point2d>& image, Eigen::Matrix3d* R,
                        Eigen::Vector3d* t) {
   constexpr int kMaxIterations = 20;
-  constexpr double kStepTolerance = 1e-12;  // rad and normalised-plane units
+  // Converged: a step below 1e-10 (rad, normalised-plane units; ~1e-7 px) or a decrease below
+  // 1e-12 of the cost (the next Gauss-Newton step is then far below the first).
+  constexpr double kStepTolerance = 1e-10;
+  constexpr double kRelativeDecrease = 1e-12;
   double cost = PlaneCost(object, image, *R, *t);
   if (!std::isfinite(cost))
     return false;
@@ -86,8 +89,11 @@ bool RefinePoseOnPlane(const std::vector<cv::Point3d>& object,
         improved = true;
         *R = R_new;
         *t = t_new;
+        const bool converged = cost - cost_new <= kRelativeDecrease * cost;
         cost = cost_new;
         lambda = 0.0;
+        if (converged)
+          return true;
       } else {
         lambda = lambda == 0.0 ? 1e-6 : 10.0 * lambda;
       }
