@@ -322,6 +322,11 @@ class SplineProblem {
     // crawls along the weak directions: the trajectory fit starts every solve inside the basin
     // (the radius still shrinks after a rejected step). Demo: 8 robust iterations -> 2.
     so.initial_trust_region_radius = 1e8;
+    // No Jacobi scaling: CHOLMOD's Cholesky is indifferent to a diagonal scaling of the normal
+    // equations, and Levenberg-Marquardt's damping is relative to diag(J^T J) with or without
+    // it, so the scaling only cost a pass over J per evaluation and one per linear solve, serial
+    // in Ceres (~4 % of the demo's CPU; docs/performance.md step 7c).
+    so.jacobi_scaling = false;
     if (robust_) {
       // The robust solve only seeds the outlier gate and the plain solve: a relative cost change
       // of 1e-6 (~0.5 at the demo's cost) is enough.
@@ -390,9 +395,11 @@ class SplineProblem {
   // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.
   void RemoveOutliers(double probability, std::vector<CameraOutliers>* report) {
     const double gate = -2.0 * std::log(1.0 - probability);  // chi-square, 2 dof
-    for (std::size_t c = 0; c < prep_.cameras.size(); ++c) {
+    // One camera per thread, as the residual statistics (Finish): each writes its own slots.
+    std::vector<CameraOutliers> found(prep_.cameras.size());
+    ParallelFor(options_.threads, prep_.cameras.size(), [&](std::size_t c) {
       PreparedCamera& cam = prep_.cameras[c];
-      CameraOutliers o;
+      CameraOutliers& o = found[c];
       o.camera = cam.state->name();
       o.views = static_cast<int>(cam.views.size());
       o.invalid = cam.invalid;
@@ -406,8 +413,8 @@ class SplineProblem {
           ++o.removed;
         }
       }
-      report->push_back(o);
-    }
+    });
+    report->insert(report->end(), found.begin(), found.end());
   }
 
   // How many residuals the current time offsets have moved out of their segment by more than

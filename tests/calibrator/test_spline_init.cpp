@@ -20,6 +20,10 @@
 #include "ctcal/spline/so3.h"
 #include "simulated_recording.h"
 
+// After Eigen (opencv2/core/eigen.hpp needs it first).
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
 namespace ctcal {
 namespace {
 
@@ -127,6 +131,76 @@ TEST(SplineInit, BoardViewsDoNotDependOnThreadsOrTheHandOver) {
     for (std::size_t i = 0; i < twelve.size(); ++i)
       EXPECT_TRUE(same(filtered[i], twelve[i])) << name << " view " << i;
   }
+}
+
+// EstimateBoardViews refines each pose by its own Gauss-Newton on the normalised plane
+// (RefinePoseOnPlane, spline_init.cpp) in place of OpenCV's SOLVEPNP_ITERATIVE (K = I), which
+// minimises the same sum of squared normalised-plane errors: on every view without a gated corner
+// the pose must be OpenCV's refined pose (to OpenCV's own stop at a relative step of FLT_EPSILON)
+// and its cost no larger.
+TEST(SplineInit, BoardPoseRefinementReachesOpenCvsOptimum) {
+  const Simulated& sim = Simulation();
+  const Board board(sim.truth.target);
+  int compared = 0;
+  double worst_deg = 0.0, worst_m = 0.0;
+  for (const char* name : {"cam0", "cam1"}) {
+    const SensorConfig& c = *sim.truth.Find(name);
+    const CameraModel camera =
+        CameraModel::Create(c.camera_model, c.intrinsics, c.distortion_model, c.distortion_coeffs,
+                            Eigen::Vector2i(c.width, c.height));
+    const auto& corners = sim.data.at(name).corners;
+    const std::vector<BoardView> views = EstimateBoardViews(camera, board, corners, 8);
+    ASSERT_GT(views.size(), 40u) << name;
+    for (const BoardView& v : views) {
+      std::vector<cv::Point3d> object;
+      std::vector<cv::Point2d> image;
+      for (const CornerObservation& o : corners) {
+        Eigen::Vector3d ray;
+        if (o.t_ns != v.t_ns || !camera.Unproject(Eigen::Vector2d(o.u, o.v), &ray) ||
+            ray.z() < 0.05)
+          continue;
+        const Eigen::Vector3d& p = board.Corner(o.corner_id);
+        object.emplace_back(p.x(), p.y(), p.z());
+        image.emplace_back(ray.x() / ray.z(), ray.y() / ray.z());
+      }
+      if (static_cast<int>(object.size()) != v.inliers)
+        continue;  // a corner was gated: OpenCV's pose on all of them is another problem
+      cv::Mat rvec, tvec, R_cv;
+      ASSERT_TRUE(cv::solvePnP(object, image, cv::Matx33d::eye(), cv::noArray(), rvec, tvec, false,
+                               cv::SOLVEPNP_IPPE));
+      cv::solvePnP(object, image, cv::Matx33d::eye(), cv::noArray(), rvec, tvec, true,
+                   cv::SOLVEPNP_ITERATIVE);
+      cv::Rodrigues(rvec, R_cv);
+      Eigen::Matrix3d R;
+      Eigen::Vector3d t;
+      cv::cv2eigen(R_cv, R);
+      cv::cv2eigen(tvec, t);
+      const auto cost = [&](const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W) {
+        double sum = 0.0;
+        for (std::size_t k = 0; k < object.size(); ++k) {
+          const Eigen::Vector3d p_C =
+              R_C_W * Eigen::Vector3d(object[k].x, object[k].y, object[k].z) + t_C_W;
+          sum += (p_C.head<2>() / p_C.z() - Eigen::Vector2d(image[k].x, image[k].y)).squaredNorm();
+        }
+        return sum;
+      };
+      const double ours = cost(v.T_C_W.linear(), v.T_C_W.translation());
+      EXPECT_LE(ours, cost(R, t) * (1.0 + 1e-9)) << name << " at " << v.t_ns;
+      const double deg =
+          RotationError<double>(Eigen::Quaterniond(v.T_C_W.linear()), Eigen::Quaterniond(R))
+              .norm() *
+          180.0 / M_PI;
+      const double m = (v.T_C_W.translation() - t).norm();
+      worst_deg = std::max(worst_deg, deg);
+      worst_m = std::max(worst_m, m);
+      EXPECT_LT(deg, 1e-6) << name << " at " << v.t_ns;
+      EXPECT_LT(m, 1e-7) << name << " at " << v.t_ns;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 80);
+  std::printf("board pose refinement vs OpenCV: %d views, worst %.2e deg, %.2e m\n", compared,
+              worst_deg, worst_m);
 }
 
 // The initial trajectory fit (spline_trajectory_fit.h) on the true calibration: from knots at the
