@@ -13,9 +13,15 @@ DATA/groundtruth/data.csv, DATA/truth.yaml and DATA/rig.yaml (a coarse, hand-mad
 lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centimetres off, time
 offsets 0, IMU intrinsics at their defaults).
 
-    python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--aux-model imu2]
-        [--gyro-model upper] [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
-        [--max-offset-ms 10] [--cam-rate 20] [--images] [--image-scale 1]
+    python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--base-model imu2]
+        [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]] [--cameras radtan,equidistant[,LENS]]
+        [--camera-only] [--imu-rates 200,250,400] [--cam-rate 20] [--noise-scale 1]
+        [--t0-ns N] [--board-hidden F] [--min-frame-corners 8] [--style block|flow|messy]
+        [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
+        [--max-offset-ms 10] [--images] [--image-scale 1]
+
+Without options (and for a given seed) it writes the same dataset as its first version, the one
+docs/initialisation.md's tables measured.
 """
 
 import argparse
