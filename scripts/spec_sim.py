@@ -14,7 +14,7 @@ lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centim
 offsets 0, IMU intrinsics at their defaults).
 
     python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--base-model imu2]
-        [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]] [--cameras radtan,equidistant[,LENS]]
+        [--g-sensitivity full|upper|none] [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]] [--cameras radtan,equidistant[,LENS]]
         [--camera-only] [--imu-rates 200,250,400] [--cam-rate 20] [--noise-scale 1]
         [--t0-ns N] [--board-hidden F] [--min-frame-corners 8] [--style block|flow|messy]
         [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
@@ -413,15 +413,18 @@ def random_full9(rng, scale_err, skew):
             for i in range(9)]
 
 
-def imu_truth(rng, model, noise, T_B_S=None, offset=None):
+def imu_truth(rng, model, noise, T_B_S=None, offset=None, g_sensitivity="full"):
+    """An IMU's truth; `g_sensitivity` none leaves the key out (SPEC 7's default)."""
     s = {"type": "imu", "model": model, "noise": noise}
     if model != "none":
         s["Dw"] = random_full9(rng, 0.01, 0.005) if model == "imu3" else random_upper6(
             rng, 0.01, 0.005)
         s["Da"] = random_full9(rng, 0.01, 0.005) if model == "imu4" else random_upper6(
             rng, 0.01, 0.005)
-        s["g_sensitivity"] = "full"
-        s["Tg"] = [rng.uniform(-1e-3, 1e-3) for _ in range(9)]
+        if g_sensitivity != "none":
+            s["g_sensitivity"] = g_sensitivity
+            n = 9 if g_sensitivity == "full" else 6
+            s["Tg"] = [rng.uniform(-1e-3, 1e-3) for _ in range(n)]
         if model == "imu1":
             s["R_I_w"] = random_rotation(rng, 1.0)
         if model == "imu2":
@@ -577,7 +580,7 @@ def make_rig(rng, args):
                 noise[key] *= args.noise_scale
     for cam in (left, right):
         cam["noise"]["pixel_sigma"] *= args.noise_scale
-    base = imu_truth(rng, args.base_model, imu_noise)
+    base = imu_truth(rng, args.base_model, imu_noise, g_sensitivity=args.g_sensitivity)
     base["estimate"] = [] if args.base_model == "none" else ["intrinsics"]
     aux_models = [m for m in args.aux_imus.split(",") if m]
     gyro_models = [m for m in args.gyros.split(",") if m]
@@ -594,7 +597,7 @@ def make_rig(rng, args):
         aux = imu_truth(rng, model, aux_noise,
                         transform(mm(R0, random_rotation(rng, 5.0)),
                                   [t[0], t[1] + rng.uniform(-0.01, 0.01), t[2]]),
-                        offset(-1.0 if i == 0 else 1.0))
+                        offset(-1.0 if i == 0 else 1.0), args.g_sensitivity)
         # SPEC 3: a `none` model has no intrinsics to estimate.
         aux["estimate"] = ["extrinsics", "time_offset"] + (
             [] if model == "none" else ["intrinsics"])
@@ -913,6 +916,8 @@ def main():
     ap.add_argument("--duration", type=float, default=18.0)
     models = ["none", "imu1", "imu2", "imu3", "imu4"]
     ap.add_argument("--base-model", default="imu2", choices=models)
+    ap.add_argument("--g-sensitivity", default="full", choices=["none", "upper", "full"],
+                    help="every IMU's T_g: 9 numbers, 6 (upper-triangular) or none")
     ap.add_argument("--aux-imus", default="imu2",
                     help="models of 0-2 auxiliary IMUs, comma-separated ('' for none)")
     ap.add_argument("--gyros", default="upper",
