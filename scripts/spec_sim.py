@@ -14,7 +14,8 @@ lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centim
 offsets 0, IMU intrinsics at their defaults).
 
     python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--base-model imu2]
-        [--g-sensitivity full|upper|none] [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]] [--cameras radtan,equidistant[,LENS]]
+        [--g-sensitivity full|upper|none] [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]]
+        [--cameras radtan,equidistant[,LENS]]
         [--camera-only] [--imu-rates 200,250,400] [--cam-rate 20] [--noise-scale 1]
         [--t0-ns N] [--board-hidden F] [--min-frame-corners 8] [--style block|flow|messy]
         [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
