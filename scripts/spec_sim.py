@@ -1064,13 +1064,13 @@ def main():
     form = ("%s %d images (%d with a whole tag), %.1f s" if render else
             "%s %d frames %d corners %d/16 image cells")
     cams = ", ".join(form % ((k,) + v) for k, v in stats.items())
-    print("spec_sim: %s, %.1f s, seed %d, base %s, aux [%s], gyros [%s], cameras [%s]%s, %s%s%s; "
-          "%s; %.1f s" % (
-              out, args.duration, args.seed, args.base_model, args.aux_imus, args.gyros,
-              args.cameras, ", camera-only" if args.camera_only else "", args.target,
-              ", rolling shutter" if args.rolling_shutter else "",
-              ", images (tag bits checked against %s)" % tag_check if render else "", cams,
-              time.time() - wall))
+    kinds = ("camera-only" if args.camera_only else "base %s, aux [%s], gyros [%s]" % (
+        args.base_model, args.aux_imus, args.gyros))
+    print("spec_sim: %s, %.1f s, seed %d, %s, cameras [%s], %s%s%s; %s; %.1f s" % (
+        out, args.duration, args.seed, kinds, args.cameras, args.target,
+        ", rolling shutter" if args.rolling_shutter else "",
+        ", images (tag bits checked against %s)" % tag_check if render else "", cams,
+        time.time() - wall))
     return 0
 
 
