@@ -51,6 +51,7 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
       });
 
   CameraDetectionSummary found;
+  found.camera = camera;
   const std::vector<CornerObservation> corners = CornersFromDetections(images, results, &found);
   if (found.unreadable == results.size())
     return cli.InputError("no image of " + camera + " could be read (" + found.first_error + ")");
@@ -59,8 +60,11 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
               camera.c_str(), results.size(), found.with_board,
               found.with_board > 0 ? static_cast<double>(corners.size()) / found.with_board : 0.0);
   if (found.unreadable > 0)
-    std::printf(", %zu unreadable (first: %s)", found.unreadable, found.first_error.c_str());
+    std::printf(", %zu unreadable", found.unreadable);
   std::printf("\n");
+  const std::string warning = UnreadableImagesWarning(found);
+  if (!warning.empty())
+    std::fprintf(stderr, "%s\n", warning.c_str());
   // What a rejection counts: AprilGrid rules drop tags; checkerboard and ChArUco rules drop
   // corners, except ChArUco's marker rules (ids not on the board, duplicates).
   const TargetType type = detector.board().type();

@@ -56,6 +56,16 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
   return corners;
 }
 
+std::string UnreadableImagesWarning(const CameraDetectionSummary& summary) {
+  if (summary.unreadable == 0 || summary.unreadable == summary.images)
+    return "";
+  if (summary.unreadable == 1)
+    return "warning: " + summary.camera + ": " + summary.first_error;
+  return "warning: " + summary.camera + ": " + std::to_string(summary.unreadable) + " of " +
+         std::to_string(summary.images) +
+         " images could not be read (first: " + summary.first_error + ")";
+}
+
 std::vector<CornerObservation> DetectCameraCorners(
     const SensorConfig& sensor, const Detector& detector, const std::string& image_dir,
     const std::vector<ImageEntry>& images, CameraDetectionSummary* summary, const InitLog& log) {
@@ -112,10 +122,12 @@ std::vector<CornerObservation> DetectCameraCorners(
                 static_cast<double>(s.corners) / static_cast<double>(s.with_board), s.unreadable,
                 s.seconds);
   s.summary = line;
-  if (s.unreadable > 0)
-    s.summary += " (first unreadable: " + s.first_error + ")";
-  if (log)
+  const std::string warning = UnreadableImagesWarning(s);
+  if (log) {
     log(s.summary);
+    if (!warning.empty())
+      log(warning);
+  }
   if (summary)
     *summary = s;
   return corners;

@@ -118,25 +118,47 @@ double EstimateNoiseSigma(const cv::Mat& gray) {
 //   Cov(q) = sigma_n^2 / 2 G^-1 (sum_i w_i^2 |d_i|^2 g_i g_i^T) G^-1.
 // (The sandwich of the model residuals r_i = g_i^T d_i instead measured how far a blurred
 // X-junction is from the ideal one, symmetric misfit that does not move q: 7x the scatter.)
+namespace {
+// The corner itself at least this far inside the image (px), and at least this fraction of the
+// window's weight on measured gradients: a corner 4 px from the border (Kalibr's bound) keeps the
+// band of rows or columns within 3 px of it, 40 % of a 12 px window's weight.
+constexpr double kRefineMinBorderPx = 2.0;
+constexpr double kRefineMinMeasuredWeight = 0.25;
+// The window of the tag corners' refinement during detection, in black borders: its capture range
+// brings a start a pixel or two off (libapriltag's straight-edge quads, the grid completion's
+// extrapolations on blurred fisheye rims) onto the junction. The final estimate comes from
+// DetectorOptions::tag_window_borders (Detector::RefineTagCorners).
+constexpr double kCaptureWindowBorders = 0.8;
+}  // namespace
+
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
                   double noise_sigma, const CornerWarp* warp) {
   CV_Assert(gray.type() == CV_8UC1);
-  // Near the image border the window shrinks to fit rather than give up on the corner.
-  const double room = std::min(std::min(uv->x(), uv->y()),
-                               std::min(gray.cols - 1.0 - uv->x(), gray.rows - 1.0 - uv->y()));
-  if (!(room >= 4.0))
+  // Near the image border the window keeps its size and loses the pixels beyond the border (their
+  // gradients are not measured). Shrinking it to fit instead left corners 4-6 px from the border
+  // with a 3 x 3 or 5 x 5 window: 0.2-0.3 px off, and one 3.6 px off with a sigma of 0.07 px
+  // (docs/targets.md), since a window that small holds no X-junction to speak of.
+  const auto inside = [&](const Eigen::Vector2d& p, double margin) {
+    return p.x() >= margin && p.y() >= margin && p.x() <= gray.cols - 1.0 - margin &&
+           p.y() <= gray.rows - 1.0 - margin;
+  };
+  if (!inside(*uv, kRefineMinBorderPx))
     return false;
-  const int h = std::max(1, std::min(half_window, static_cast<int>(room) - 3));
+  const int h = std::max(1, half_window);
   const int n = 2 * h + 3;  // patch with a one-pixel rim for central differences
   const double weight_sigma = 0.5 * (h + 1);
   std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
+  double weight_sum = 0.0;
   for (int dy = -h; dy <= h; ++dy) {
     for (int dx = -h; dx <= h; ++dx) {
-      weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)] =
+      weight_sum += weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)] =
           std::exp(-(dx * dx + dy * dy) / (2.0 * weight_sigma * weight_sigma));
     }
   }
   cv::Mat patch;
+  // in_image[r * n + c]: the patch sample (r, c) lies in the image (outside, getRectSubPix and the
+  // clamped bilinear read repeat the border, which is no measurement).
+  std::vector<uint8_t> in_image(static_cast<size_t>(n * n));
   // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates); with a warp,
   // `at` and the patch are in rectified coordinates, each pixel read bilinearly at its image point.
   const auto sample_patch = [&](const Eigen::Vector2d& at) {
@@ -144,6 +166,11 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       cv::getRectSubPix(gray, cv::Size(n, n),
                         cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
                         CV_32F);
+      for (int r = 0; r < n; ++r) {
+        for (int c = 0; c < n; ++c)
+          in_image[static_cast<size_t>(r * n + c)] =
+              inside(at + Eigen::Vector2d(c - h - 1, r - h - 1), 0.0);
+      }
       return;
     }
     patch.create(n, n, CV_32F);
@@ -151,6 +178,7 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       float* out = patch.ptr<float>(r);
       for (int c = 0; c < n; ++c) {
         const Eigen::Vector2d p = warp->ToImage(at + Eigen::Vector2d(c - h - 1, r - h - 1));
+        in_image[static_cast<size_t>(r * n + c)] = inside(p, 0.0);
         const double x = std::clamp(p.x(), 0.0, gray.cols - 1.001);
         const double y = std::clamp(p.y(), 0.0, gray.rows - 1.001);
         const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
@@ -162,20 +190,36 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       }
     }
   };
-  // f(d, w, g) for every pixel of the window: its offset d from the centre, its weight w and the
-  // central-difference gradient g of the patch there.
+  // f(d, w, g) for every pixel of the window whose gradient is measured (its four neighbours in
+  // the image): its offset d from the centre, its weight w and the central-difference gradient g
+  // of the patch there. Returns the weight of those pixels.
   const auto for_each_gradient = [&](const auto& f) {
+    double measured = 0.0;
     for (int dy = -h; dy <= h; ++dy) {
       const float* row = patch.ptr<float>(dy + h + 1);
       const float* up = patch.ptr<float>(dy + h);
       const float* down = patch.ptr<float>(dy + h + 2);
+      const uint8_t* in_row = &in_image[static_cast<size_t>((dy + h + 1) * n)];
+      const uint8_t* in_up = in_row - n;
+      const uint8_t* in_down = in_row + n;
+      // The point-mirrored pixel (the window is centred on the corner): a blurred X-junction
+      // misfits the model symmetrically about its centre, which cancels in a symmetric window
+      // only (a window cut on one side left corners near the border 0.1-0.25 px off).
+      const uint8_t* mirror_row = &in_image[static_cast<size_t>((h - dy + 1) * n)];
+      const uint8_t* mirror_up = mirror_row - n;
+      const uint8_t* mirror_down = mirror_row + n;
       for (int dx = -h; dx <= h; ++dx) {
-        const int c = dx + h + 1;
+        const int c = dx + h + 1, m = h - dx + 1;
+        if (!(in_row[c - 1] && in_row[c + 1] && in_up[c] && in_down[c] && mirror_row[m - 1] &&
+              mirror_row[m + 1] && mirror_up[m] && mirror_down[m]))
+          continue;
         const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
-        f(Eigen::Vector2d(dx, dy), weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)],
-          g);
+        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
+        measured += w;
+        f(Eigen::Vector2d(dx, dy), w, g);
       }
     }
+    return measured;
   };
   const Eigen::Vector2d start = *uv;
   Eigen::Vector2d q = start;
@@ -183,16 +227,20 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
   Eigen::Matrix2d G_inv = Eigen::Matrix2d::Zero();
   bool converged = false;
   for (int iteration = 0; iteration < 30; ++iteration) {
-    if (q.x() < h + 2 || q.y() < h + 2 || q.x() > gray.cols - h - 3 || q.y() > gray.rows - h - 3)
+    if (!inside(warp == nullptr ? q : warp->ToImage(q), kRefineMinBorderPx))
       return false;
     sample_patch(q);
     G.setZero();
     Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
-      const Eigen::Matrix2d wgg = w * g * g.transpose();
-      G += wgg;
-      b += wgg * d;  // p_i - q_current
-    });
+    const double measured =
+        for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
+          const Eigen::Matrix2d wgg = w * g * g.transpose();
+          G += wgg;
+          b += wgg * d;  // p_i - q_current
+        });
+    // Most of the window beyond the image: too little of the junction is seen.
+    if (measured < kRefineMinMeasuredWeight * weight_sum)
+      return false;
     const double det = G.determinant();
     if (!(det > 1e-9 * G.trace() * G.trace()) || G.trace() <= 0.0)
       return false;
@@ -622,11 +670,11 @@ std::array<double, 4> TagCornerEdgeOffsets(const cv::Mat& gray,
   return offsets;
 }
 
-// Half-width of the refinement window at a tag corner: the clean neighbourhood of a tag corner
-// is the black border's width (and the corner square); the window stays inside it, and is at
-// least Kalibr's 5 x 5.
-int TagCornerHalfWindow(int black_border, double bit_px) {
-  return std::clamp(static_cast<int>(0.8 * black_border * bit_px), 2, 12);
+// Half-width of a tag corner's refinement window: `borders` black borders of the tag's shortest
+// edge (the clean neighbourhood of the junction is the border's width and the corner square),
+// at least Kalibr's 5 x 5.
+int TagCornerHalfWindow(int black_border, double bit_px, double borders) {
+  return std::clamp(static_cast<int>(borders * black_border * bit_px), 2, 12);
 }
 
 // The tags whose four corners are all among `corners`.
@@ -764,7 +812,6 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
       const double bit_px = edge / cells;
       if (!(bit_px >= options.min_bit_px))
         continue;
-      const int half_window = TagCornerHalfWindow(border, bit_px);
       std::array<DetectedCorner, 4> refined;
       std::array<Eigen::Vector2d, 4> uv;
       // Refines the four corners from `starts` and reads the tag there.
@@ -773,7 +820,9 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
         for (size_t k = 0; k < 4 && ok; ++k) {
           uv[k] = starts[k];
           double sigma = 0.0;
-          ok = inside(starts[k]) && RefineCorner(gray, half_window, &uv[k], &sigma, noise_sigma) &&
+          ok = inside(starts[k]) &&
+               RefineCorner(gray, TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders),
+                            &uv[k], &sigma, noise_sigma) &&
                (uv[k] - starts[k]).norm() <= bit_px && inside(uv[k]);
           refined[k].id = ids[k];
           refined[k].uv = uv[k];
@@ -1058,11 +1107,58 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
       break;
   }
   if (options_.refine && result.board_found) {
+    if (board_.type() == TargetType::kAprilGrid)
+      RefineTagCorners(gray, noise_sigma, &result);
     if (options_.rectify)
       RefineRectified(gray, noise_sigma, &result);
     AddModelError(&result);
   }
   return result;
+}
+
+// Every accepted tag corner refined once more from its estimate with the final window
+// (DetectorOptions::tag_window_borders, smaller than the capture window): the lens' outward pull
+// grows with the window's area while the noise only falls with its width (docs/targets.md). The
+// detection's decisions (completion, code and edge checks, the grid scatter) all rest on the
+// capture window's corners, as before: on TUM-VI's blurred fisheye rim the final window's corners
+// differ by up to 0.3 px, which the grid completion's line extrapolation amplifies 7-fold. A
+// corner the final window moves by more than that keeps its capture estimate.
+void Detector::RefineTagCorners(const cv::Mat& gray, double noise_sigma,
+                                DetectionResult* result) const {
+  constexpr double kMaxMovePx = 0.3;
+  const int border = board_.config().black_tag_border;
+  const int cells = 6 + 2 * border;
+  std::vector<DetectedCorner>& corners = result->corners;  // sorted by id
+  const auto find = [&](int id) -> DetectedCorner* {
+    const auto it = std::lower_bound(corners.begin(), corners.end(), id,
+                                     [](const DetectedCorner& c, int key) { return c.id < key; });
+    return it != corners.end() && it->id == id ? &*it : nullptr;
+  };
+  for (int tag = 0; tag < board_.NumTags(); ++tag) {
+    const std::array<int, 4> ids = board_.TagCornerIds(tag);
+    std::array<DetectedCorner*, 4> c{};
+    bool whole = true;
+    for (size_t k = 0; k < 4; ++k)
+      whole &= (c[k] = find(ids[k])) != nullptr;
+    if (!whole)
+      continue;
+    double edge = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < 4; ++k)
+      edge = std::min(edge, (c[k]->uv - c[(k + 1) % 4]->uv).norm());
+    const double bit_px = edge / cells;
+    const int fine = TagCornerHalfWindow(border, bit_px, options_.tag_window_borders);
+    if (fine == TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders))
+      continue;
+    for (DetectedCorner* corner : c) {
+      Eigen::Vector2d uv = corner->uv;
+      double sigma = 0.0;
+      if (RefineCorner(gray, fine, &uv, &sigma, noise_sigma) &&
+          (uv - corner->uv).norm() <= kMaxMovePx) {
+        corner->uv = uv;
+        corner->sigma = sigma;
+      }
+    }
+  }
 }
 
 // The refinement's sigma propagates image noise only. The corners of a view also carry errors
@@ -1138,7 +1234,6 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         result.rejected.push_back({tag.id, RejectReason::kTooSmall});
         continue;
       }
-      const int half_window = TagCornerHalfWindow(board_.config().black_tag_border, bit_px);
       // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
       // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
       // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
@@ -1153,7 +1248,10 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         if (!options_.refine)
           continue;
         double sigma = 0.0;
-        if (!RefineCorner(gray, half_window, &refined[k].uv, &sigma, noise_sigma) ||
+        if (!RefineCorner(gray,
+                          TagCornerHalfWindow(board_.config().black_tag_border, bit_px,
+                                              kCaptureWindowBorders),
+                          &refined[k].uv, &sigma, noise_sigma) ||
             (refined[k].uv - tag.corners[k]).norm() > max_jump) {
           ok = false;
           break;

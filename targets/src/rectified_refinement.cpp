@@ -21,11 +21,11 @@ const DetectedCorner* FindCorner(const std::vector<DetectedCorner>& sorted, int 
 
 // Radius (board metres) around a corner that holds only the junction's own two edges; the
 // detectors' first refinements use the same fractions of the image's features.
-double CleanRadiusM(const Board& board) {
+double CleanRadiusM(const Board& board, const DetectorOptions& options) {
   const TargetConfig& config = board.config();
   switch (board.type()) {
     case TargetType::kAprilGrid:
-      return 0.8 * config.black_tag_border * board.TagBitSize();
+      return options.tag_window_borders * config.black_tag_border * board.TagBitSize();
     case TargetType::kCheckerboard:
       return 0.4 * std::min(config.row_spacing_m, config.col_spacing_m);
     case TargetType::kCharuco:
@@ -126,7 +126,7 @@ void Detector::RefineRectified(const cv::Mat& gray, double noise_sigma,
   // and the first refinement's corner stands.
   constexpr double kMaxMovePx = 1.0;
   const std::vector<DetectedCorner> first = result->corners;  // every fit sees the same corners
-  const double clean_m = CleanRadiusM(board_);
+  const double clean_m = CleanRadiusM(board_, options_);
   for (size_t i = 0; i < first.size(); ++i) {
     CornerWarp warp;
     double px_per_m = 0.0;

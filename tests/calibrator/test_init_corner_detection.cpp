@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -127,6 +128,36 @@ TEST(InitCornerDetection, DetectsImagesOnlyCamerasAndWritesTheCornersIntoOut) {
   EXPECT_TRUE(DetectMissingCorners(r.rig, r.dir.string(), out.string(), 2, &r.data, {}).empty());
   fs::remove_all(r.dir);
   fs::remove_all(out);
+}
+
+// Unreadable images among good ones: one warning line naming the (first) file, the rest detected.
+TEST(InitCornerDetection, UnreadableImagesAmongGoodOnesAreOneWarningNamingTheFile) {
+  Rendered r = Render("one_unreadable");
+  const fs::path out = r.dir.string() + "_out";
+  const fs::path bad = r.dir / "cam0" / "data" / "broken.png";
+  std::ofstream(bad) << "not a png";
+  r.data["cam0"].images.push_back({2000000000, "broken.png"});
+  std::vector<std::string> lines;
+  const std::vector<CameraDetectionSummary> summaries =
+      DetectMissingCorners(r.rig, r.dir.string(), out.string(), 2, &r.data,
+                           [&](const std::string& line) { lines.push_back(line); });
+  ASSERT_EQ(summaries.size(), 1u);
+  EXPECT_EQ(summaries[0].with_board, 3u);
+  EXPECT_EQ(summaries[0].unreadable, 1u);
+  EXPECT_THAT(lines, ::testing::Contains("warning: cam0: cannot read image " + bad.string()));
+  fs::remove_all(r.dir);
+  fs::remove_all(out);
+
+  CameraDetectionSummary s;
+  s.camera = "cam1";
+  s.images = 10;
+  s.first_error = "cannot read image a.png";
+  EXPECT_EQ(UnreadableImagesWarning(s), "");
+  s.unreadable = 3;
+  EXPECT_EQ(UnreadableImagesWarning(s),
+            "warning: cam1: 3 of 10 images could not be read (first: cannot read image a.png)");
+  s.unreadable = 10;  // none readable: the stage's error, not a warning
+  EXPECT_EQ(UnreadableImagesWarning(s), "");
 }
 
 std::string ErrorOf(Rendered& r) {

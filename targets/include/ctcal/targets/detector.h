@@ -45,14 +45,21 @@ struct DetectorOptions {
   // code check. On rendered double-sphere views good corners sit within 0.56 px (99.9 %), corners
   // more than 1 px off at 0.73-2.9 px (docs/targets.md).
   double max_edge_offset_px = 0.75;
+  // Half-width of a tag corner's refinement window, in black borders of the tag's shortest edge
+  // (2-12 px). The lens bends the junction's edges, which pulls the estimate outward in
+  // proportion to the window's area (0.005-0.009 px at mid-field with 0.8, the same in every
+  // view), while the noise grows only as one over the window's width: with 0.5 the corners'
+  // error is ~20 % larger, the pull half as large, and images-only calibrations end with their
+  // camera parameters within 3 sigma of the truth instead of 3-6.5 sigma off (docs/targets.md).
+  double tag_window_borders = 0.5;
   // Sub-pixel refinement on/off. The reported sigma is the refinement's noise sigma and the view's
   // model error (EstimateGridScatter beyond the noise) in quadrature, at least min_sigma_px.
   bool refine = true;
   // Inner corners refined once more in a patch rectified by their grid neighbourhood's quadratic
-  // board map (LocalBoardWarp): it removes most of the lens' outward pull (0.007 px at mid-field)
-  // from them, but the board's edge corners keep it, and that difference biased a radtan focal
-  // length by 4.8 sigma on independently rendered images. Off until edge corners are rectified
-  // too (docs/targets.md).
+  // board map (LocalBoardWarp): it removes most of the lens' outward pull from them (0.007 px at
+  // mid-field with a 0.8 window, 0.003 px with tag_window_borders' 0.5), but the board's edge
+  // corners keep it, and that difference biased a radtan focal length by 4.8 sigma on
+  // independently rendered images. Off until edge corners are rectified too (docs/targets.md).
   bool rectify = false;
   double min_sigma_px = 0.01;
   // The model error is measured only on views with at least this many grid fits (5 corners in a
@@ -142,6 +149,8 @@ class Detector {
   // (LocalBoardWarp): on the straight-edged junction the refinement is not pulled outward by the
   // lens' bending nor by the foreshortening's scale change across its window.
   void RefineRectified(const cv::Mat& gray, double noise_sigma, DetectionResult* result) const;
+  // Every AprilGrid corner refined once more with the final window (tag_window_borders).
+  void RefineTagCorners(const cv::Mat& gray, double noise_sigma, DetectionResult* result) const;
   void AddModelError(DetectionResult* result) const;
 
   Board board_;
@@ -170,7 +179,9 @@ std::vector<TagDetection> DetectTags36h11(const cv::Mat& image, int black_border
 
 // Refines an X-junction or a corner near `uv` by the gradient-orthogonality condition (every
 // image gradient in a window is orthogonal to the vector from the corner to its pixel), weighted
-// by a Gaussian; the window shrinks near the image border. Returns false if it does not converge.
+// by a Gaussian; near the image border the window keeps its size and leaves out the pixels whose
+// gradient is not measured and their mirror images through the corner (the corner must stay 2 px
+// inside and keep a quarter of the window's weight). Returns false if it does not converge.
 // `sigma_px` (optional): the estimate's standard deviation per coordinate caused by white image
 // noise of `noise_sigma` grey levels, propagated through the refinement (docs/targets.md).
 //

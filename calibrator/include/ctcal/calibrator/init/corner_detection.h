@@ -39,13 +39,18 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
                                                      const std::vector<DetectionResult>& results,
                                                      CameraDetectionSummary* summary);
 
+// "warning: <camera>: <first error>" when one of several images could not be read, "warning:
+// <camera>: N of M images could not be read (first: <first error>)" for several; empty when none
+// or all were unreadable (all: an error, not a warning). The first error names the file.
+std::string UnreadableImagesWarning(const CameraDetectionSummary& summary);
+
 // Detects the board in every image of one camera (`image_dir`/<filename> for each entry of
 // `images`, the camera's data.csv) and returns the corners in SPEC section 6 rows: the image's
 // stamp, the corner id, the pixel and the detector's sigma. Logs progress per tenth of the
-// images and the summary line. Throws InitError (stage "corner detection", the camera) when
-// data.csv lists no image, when no image can be read, when an image's size is not the camera's
-// resolution, or when no image shows the board (with a hint from the rejections: a larger board
-// or another border width than the target file says).
+// images, the summary line and UnreadableImagesWarning's line. Throws InitError (stage "corner
+// detection", the camera) when data.csv lists no image, when no image can be read, when an image's
+// size is not the camera's resolution, or when no image shows the board (with a hint from the
+// rejections: a larger board or another border width than the target file says).
 std::vector<CornerObservation> DetectCameraCorners(const SensorConfig& camera,
                                                    const Detector& detector,
                                                    const std::string& image_dir,
