@@ -141,8 +141,9 @@ BENCHMARK(BM_Calibrate)
 // CalibrateSpline, report data included; the report's rendering is not). The data are simulated
 // by a child process (its memory is not this process') into a temporary folder, unless
 // CTCAL_BENCH_LONG_DATA names a folder `ctcal simulate` wrote. peak_rss_mb is the process' peak
-// (getrusage), so run this case alone:
-//   build/bench/bench_calibrate --benchmark_filter=BM_LongRecordingMemory
+// (getrusage), so run each case alone (one --benchmark_filter per process):
+//   build/bench/bench_calibrate --benchmark_filter='BM_LongRecordingMemory/inertial_K:0'
+// arg inertial_K: the base IMU's run length (0: the rule of InertialBlockSegments).
 void BM_LongRecordingMemory(benchmark::State& state) {
   std::string dir;
   if (const char* env = std::getenv("CTCAL_BENCH_LONG_DATA")) {
@@ -174,16 +175,20 @@ void BM_LongRecordingMemory(benchmark::State& state) {
   }
   SplineCalibratorOptions options;
   options.threads = 2;
+  options.inertial_block_segments = static_cast<int>(state.range(0));
   SplineCalibrationResult result;
   for (auto _ : state) {
     const RigConfig rig = LoadRig(dir + "/rig.yaml");
-    result = CalibrateSpline(rig, LoadDataset(dir, rig), options, [](const std::string&) {});
+    result = CalibrateSpline(rig, LoadDataset(dir, rig), options, BenchLog());
     benchmark::DoNotOptimize(result.result.solver);
   }
   state.counters["peak_rss_mb"] = CurrentMemoryUsage().peak_mb;
   SetRunCounters(result, &state);
 }
 BENCHMARK(BM_LongRecordingMemory)
+    ->ArgNames({"inertial_K"})
+    ->Args({0})
+    ->Args({5})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()

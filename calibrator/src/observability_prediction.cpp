@@ -197,7 +197,18 @@ void CompleteObservability(const RigConfig& rig, const std::map<std::string, Sen
                            std::vector<std::string>* warnings) {
   if (!result->observability)
     return;
-  AnalyseMotion(rig, data, MotionOptions{}, &*result->observability);
+  Observability motion;
+  AnalyseMotion(rig, data, MotionOptions{}, &motion);
+  CompleteObservability(motion, result, log, warnings);
+}
+
+void CompleteObservability(const Observability& motion, RigConfig* result,
+                           const std::function<void(const std::string&)>& log,
+                           std::vector<std::string>* warnings) {
+  if (!result->observability)
+    return;
+  result->observability->motion = motion.motion;
+  result->observability->predicted_unobservable = motion.predicted_unobservable;
   MergePredictedWeakIntoUnobservable(&*result->observability, result);
   ReportObservability(*result, *result->observability, log, warnings);
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <ctime>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -514,13 +515,20 @@ SplineCalibrationResult Calibrate(const RigConfig& rig,
   const std::clock_t cpu_prepare = std::clock();
   Prepare(&state, data, options, init, log, &prep);
   SeedBiasSplines(init, &state);
+  // The observability's motion half reads the raw inertial data: analysed now, so that a caller
+  // who gives the data up has them released before the solves (below).
+  std::optional<Observability> motion;
+  if (options.compute_covariance) {
+    motion.emplace();
+    AnalyseMotion(rig, data, MotionOptions{}, &*motion);
+  }
   if (owned != nullptr) {
-    // Prepare holds the selected corners; the rest of the run reads the inertial data only
-    // (CompleteObservability), so the loaded corners go.
-    for (const PreparedCamera& cam : prep.cameras) {
-      const auto it = owned->find(cam.state->name());
-      if (it != owned->end())
-        std::vector<CornerObservation>().swap(it->second.corners);
+    // Prepare holds the selected corners and samples, and the rest of the run reads them only:
+    // the loaded ones go (10 min of 1 kHz IMU and 2 cameras: ~175 MB).
+    for (auto& [name, d] : *owned) {
+      std::vector<CornerObservation>().swap(d.corners);
+      std::vector<ImuSample>().swap(d.imu);
+      std::vector<GyroSample>().swap(d.gyro);
     }
   }
   ReleaseFreedMemory();
@@ -551,7 +559,13 @@ SplineCalibrationResult Calibrate(const RigConfig& rig,
             : RunPipeline<6, Se3Representation::kJoint>(&prep, options, log, &out);
       break;
   }
-  CompleteObservability(rig, data, &out.result, log, &out.warnings);
+  // The prepared corners and samples are done with: returned to the system before the caller
+  // renders the report (10 min at 1 kHz: freed but still resident, they made the report's
+  // rendering the command's peak; docs/performance.md step 7e).
+  prep = Prepared();
+  ReleaseFreedMemory();
+  if (motion)
+    CompleteObservability(*motion, &out.result, log, &out.warnings);
   out.total_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   if (out.result.solver)

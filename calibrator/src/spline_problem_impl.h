@@ -267,7 +267,12 @@ class SplineProblem {
     robust_ = robust;
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    // With an evaluation callback Ceres writes every evaluation point into the parameter blocks'
+    // memory before evaluating, which the split frames' intrinsic rows read their pose from
+    // (frame_corners_residual.h).
+    po.evaluation_callback = &point_in_memory_;
     problem_ = std::make_unique<ceres::Problem>(po);
+    kept_corners_.clear();
     inertial_ids_.clear();
     prior_ids_.clear();
     segments_.clear();
@@ -607,6 +612,12 @@ class SplineProblem {
   // are applied per corner inside the block.
   void AddCameraFrames(PreparedCamera* cam, bool robust) {
     SensorState& s = *cam->state;
+    // The split halves only where the intrinsic rows have a free block (a block of constant
+    // blocks only would be evaluated once, at the start, as Ceres' fixed cost).
+    const bool many =
+        static_cast<int>(cam->views.size()) > SplineCalibratorOptions::kSplitFrameRowsAbove;
+    const bool split = (options_.split_frame_rows > 0 || (options_.split_frame_rows < 0 && many)) &&
+                       s.config.Estimates(EstimateItem::kIntrinsics);
     ForEachFrame(*cam, [&](std::size_t first, std::size_t last) {
       if (!AnyLeft(*cam, first, last))
         return;
@@ -621,23 +632,37 @@ class SplineProblem {
       p.params = s.camera->mutable_params();
       const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
       const double huber = robust ? options_.huber_threshold : 0.0;
-      ceres::CostFunction* cost = nullptr;
-      if (std::none_of(cam->removed.begin() + static_cast<std::ptrdiff_t>(first),
-                       cam->removed.begin() + static_cast<std::ptrdiff_t>(last),
-                       [](bool r) { return r; })) {
-        // The block reads the frame's corners where Prepare put them (prep_ outlives the
-        // problem): the corners are held once, not once more per block.
-        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), &cam->corners[first],
-                                                static_cast<int>(last - first), clock, huber);
-      } else {
-        std::vector<CornerMeasurement> corners;
+      // The block reads the frame's corners where Prepare put them (prep_ outlives the problem):
+      // the corners are held once, not once more per block; a frame with outliers removed reads
+      // the rest from kept_corners_ (the problem's).
+      const CornerMeasurement* corners = &cam->corners[first];
+      int count = static_cast<int>(last - first);
+      if (std::any_of(cam->removed.begin() + static_cast<std::ptrdiff_t>(first),
+                      cam->removed.begin() + static_cast<std::ptrdiff_t>(last),
+                      [](bool r) { return r; })) {
+        std::vector<CornerMeasurement> kept;
         for (std::size_t i = first; i < last; ++i) {
           if (!cam->removed[i])
-            corners.push_back(cam->corners[i]);
+            kept.push_back(cam->corners[i]);
         }
-        cost = MakeFrameCornersResidual<N, Rep>(s.camera->type(), std::move(corners), clock, huber);
+        kept_corners_.push_back(std::move(kept));
+        corners = kept_corners_.back().data();
+        count = static_cast<int>(kept_corners_.back().size());
       }
-      problem_->AddResidualBlock(cost, nullptr, FrameCornersResidual<N, Rep>::Blocks(p));
+      const std::vector<double*> blocks = FrameCornersResidual<N, Rep>::Blocks(p);
+      if (!split) {
+        problem_->AddResidualBlock(
+            MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, clock, huber),
+            nullptr, blocks);
+        return;
+      }
+      problem_->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count,
+                                                                  clock, huber, FrameRows::kPose),
+                                 nullptr, blocks);
+      problem_->AddResidualBlock(
+          MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, clock, huber,
+                                           FrameRows::kIntrinsics, blocks),
+          nullptr, p.params);
     });
   }
 
@@ -676,6 +701,8 @@ class SplineProblem {
   template <class R>
   struct SampleSetOf {
     using Residual = R;
+    // functors[i] is the sample raw[i] of the prepared data (which outlives the problem).
+    const typename RawSampleOf<typename R::Setup>::type* raw = nullptr;
     std::vector<typename R::Functor> functors;
     std::vector<int> seg;
     std::vector<int> bseg;
@@ -689,24 +716,24 @@ class SplineProblem {
     SensorState& s = *in.state;
     const InertialNoise& noise = s.config.noise;
     const double shift = s.is_base ? 0.0 : s.time_offset;
-    const auto locate = [&](std::int64_t t_ns, auto* set, SegmentClock* clock,
-                            SegmentClock* bias_clock) {
-      const int seg = SegmentOf(t_ns, shift);
-      const int bseg = BiasSegmentOf(s.bias_gyro, t_ns);
+    // The sample on its segments (InertialBlockResidual places held samples the same way).
+    const auto place = [&](const auto& z, auto* set, auto* setup) {
+      const int seg = SegmentOf(z.t_ns, shift);
+      const int bseg = BiasSegmentOf(s.bias_gyro, z.t_ns);
       set->seg.push_back(seg);
       set->bseg.push_back(bseg);
-      *clock = SegmentClock::At(t_ns, spline_.timing(), seg);
-      *bias_clock = SegmentClock::At(t_ns, s.bias_gyro.timing, bseg);
+      PlaceSample(z, SegmentClock::At(z.t_ns, spline_.timing(), seg),
+                  SegmentClock::At(z.t_ns, s.bias_gyro.timing, bseg), setup);
     };
     const auto imu_set = [&](auto* set) {
       set->sizes = std::decay_t<decltype(*set)>::Residual::BlockSizes(s.imu->layout());
+      set->raw = in.imu.data();
+      set->functors.reserve(in.imu.size());
+      ImuSampleSetup setup;
+      setup.layout = s.imu->layout();
+      setup.W = ImuWhitening::Of(noise);
       for (const ImuSample& z : in.imu) {
-        ImuSampleSetup setup;
-        setup.layout = s.imu->layout();
-        setup.z.w_m = z.w_m;
-        setup.z.a_m = z.a_m;
-        setup.W = ImuWhitening::Of(noise);
-        locate(z.t_ns, set, &setup.clock, &setup.bias_clock);
+        place(z, set, &setup);
         set->functors.emplace_back(setup);
       }
     };
@@ -744,12 +771,13 @@ class SplineProblem {
       using R = AuxGyroResidual<N, Rep, Nb>;
       SampleSetOf<R> set;
       set.sizes = R::BlockSizes(s.gyro->model());
+      set.raw = in.gyro.data();
+      set.functors.reserve(in.gyro.size());
+      GyroSampleSetup setup;
+      setup.model = s.gyro->model();
+      setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
       for (const GyroSample& z : in.gyro) {
-        GyroSampleSetup setup;
-        setup.model = s.gyro->model();
-        setup.w_m = z.w_m;
-        setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
-        locate(z.t_ns, &set, &setup.clock, &setup.bias_clock);
+        place(z, &set, &setup);
         set.functors.push_back(typename R::Functor{setup});
       }
       f(set, [&](int seg, int bseg) {
@@ -828,9 +856,13 @@ class SplineProblem {
           ++end;
         const int first_seg = set.seg[begin];
         const int num_segments = set.seg[end - 1] - first_seg + 1;
-        std::vector<typename R::Functor> functors(
-            std::make_move_iterator(set.functors.begin() + static_cast<std::ptrdiff_t>(begin)),
-            std::make_move_iterator(set.functors.begin() + static_cast<std::ptrdiff_t>(end)));
+        // The block reads its samples where Prepare put them (prep_ outlives the problem).
+        HeldInertialSamples<typename InertialBlockResidual<R>::Raw> held;
+        held.samples = set.raw + begin;
+        held.trajectory = spline_.timing();
+        held.first_segment = first_seg;
+        held.bias = s.bias_gyro.timing;
+        held.bias_segment = set.bseg[begin];
         std::vector<std::uint8_t> offsets;
         for (std::size_t i = begin; i < end; ++i)
           offsets.push_back(static_cast<std::uint8_t>(set.seg[i] - first_seg));
@@ -843,8 +875,8 @@ class SplineProblem {
           manifolds.push_back(LiftedManifold(sample[b]));
         }
         ids.push_back(problem_->AddResidualBlock(
-            new InertialBlockResidual<R>(std::move(functors), std::move(offsets), num_segments,
-                                         set.sizes, manifolds, 0.0, stacked),
+            new InertialBlockResidual<R>(set.functors[begin], held, std::move(offsets),
+                                         num_segments, set.sizes, manifolds, 0.0, stacked),
             nullptr, blocks));
         begin = end;
       }
@@ -889,9 +921,14 @@ class SplineProblem {
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<int> segments_;
+  std::vector<std::vector<CornerMeasurement>> kept_corners_;  // frames with outliers removed
   bool robust_ = false;
   double last_cost_ = 0.0;  // of the last solve
 
+  // Nothing to prepare: its presence makes Ceres write each point into the blocks (Build).
+  struct PointInMemory : ceres::EvaluationCallback {
+    void PrepareForEvaluation(bool, bool) override {}
+  } point_in_memory_;
   So3RightManifold so3_right_;
   Se3RightManifold se3_right_;
   So3LeftManifold so3_left_;

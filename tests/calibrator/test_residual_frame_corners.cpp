@@ -3,7 +3,9 @@
 // frame; at a noisy frame (with outliers beyond the Huber threshold) its cost equals the sum of
 // the per-corner costs and its gradient and Gauss-Newton Hessian equal theirs, in L2 and Huber;
 // and one Levenberg-Marquardt iteration of Ceres over many frames moves every parameter to the
-// same value as the per-corner problem does.
+// same value as the per-corner problem does. The same for the split form (pose rows over every
+// block, intrinsic rows over the intrinsics), also over several iterations, where the intrinsic
+// rows read each candidate point from the blocks' memory.
 #include "ctcal/calibrator/residuals/frame_corners_residual.h"
 
 #include <gtest/gtest.h>
@@ -103,15 +105,39 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
     P->AddParameterBlock(params, num_params);
   }
 
-  // The frame block, or the per-corner blocks of the same corners, added to P.
-  void AddFrame(ceres::Problem* P, bool compressed, CameraModelType type,
+  // How a frame enters a problem.
+  enum Mode { kPerCorner = 0, kCompressed = 1, kSplit = 2 };
+
+  // A problem whose evaluation points are written into the blocks' memory (the split form needs
+  // that, as in the calibrator).
+  ceres::Problem::Options ProblemOptions() {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.evaluation_callback = &point_in_memory_;
+    return po;
+  }
+
+  // The frame block (whole or split), or the per-corner blocks of the same corners, added to P;
+  // `corners` must outlive P (the split blocks read them).
+  void AddFrame(ceres::Problem* P, int mode, CameraModelType type,
                 const std::vector<CornerMeasurement>& corners, std::int64_t stamp, double huber,
                 double* params) {
     const int seg = SegmentAt(stamp);
     const SegmentClock clock = SegmentClock::At(stamp, this->spline_.timing(), seg);
-    if (compressed) {
+    if (mode == kCompressed) {
       P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners, clock, huber), nullptr,
                           FrameBlocks(seg, params));
+      return;
+    }
+    if (mode == kSplit) {
+      const std::vector<double*> blocks = FrameBlocks(seg, params);
+      const int count = static_cast<int>(corners.size());
+      P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners.data(), count, clock,
+                                                           huber, FrameRows::kPose),
+                          nullptr, blocks);
+      P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners.data(), count, clock,
+                                                           huber, FrameRows::kIntrinsics, blocks),
+                          nullptr, params);
       return;
     }
     for (const CornerMeasurement& m : corners) {
@@ -121,6 +147,9 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
     }
   }
 
+  struct PointInMemory : ceres::EvaluationCallback {
+    void PrepareForEvaluation(bool, bool) override {}
+  } point_in_memory_;
   So3RightManifold so3_;
   Se3RightManifold se3_;
   So3LeftManifold left_;
@@ -206,13 +235,11 @@ TYPED_TEST(FrameCornersTest, CostGradientAndHessianEqualPerCorner) {
         double cost = 0.0;
         std::vector<double> gradient;
         Eigen::MatrixXd H;
-      } ev[2];
-      for (int compressed = 0; compressed < 2; ++compressed) {
-        ceres::Problem::Options po;
-        po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-        ceres::Problem P(po);
+      } ev[3];
+      for (int compressed = 0; compressed < 3; ++compressed) {
+        ceres::Problem P(this->ProblemOptions());
         this->AddParameters(&P, params.data(), static_cast<int>(params.size()));
-        this->AddFrame(&P, compressed == 1, type, corners, stamp, huber, params.data());
+        this->AddFrame(&P, compressed, type, corners, stamp, huber, params.data());
         ceres::CRSMatrix crs;
         ASSERT_TRUE(P.Evaluate(ceres::Problem::EvaluateOptions(), &ev[compressed].cost, nullptr,
                                &ev[compressed].gradient, &crs));
@@ -224,21 +251,27 @@ TYPED_TEST(FrameCornersTest, CostGradientAndHessianEqualPerCorner) {
         ev[compressed].H = J.transpose() * J;
       }
       EXPECT_GT(ev[0].cost, 30.0);  // noise and outliers: far from zero
-      EXPECT_NEAR(ev[1].cost, ev[0].cost, 1e-12 * ev[0].cost)
-          << CameraModelName(type) << " " << huber;
       const Eigen::Map<const Eigen::VectorXd> g0(ev[0].gradient.data(), ev[0].gradient.size());
-      const Eigen::Map<const Eigen::VectorXd> g1(ev[1].gradient.data(), ev[1].gradient.size());
-      ASSERT_EQ(g0.size(), g1.size());
-      EXPECT_LT((g1 - g0).cwiseAbs().maxCoeff(), 1e-9 * g0.cwiseAbs().maxCoeff())
-          << CameraModelName(type) << " " << huber;
-      EXPECT_LT(testing::MaxAbs(ev[1].H - ev[0].H), 1e-9 * testing::MaxAbs(ev[0].H))
-          << CameraModelName(type) << " " << huber;
+      for (int m = 1; m < 3; ++m) {
+        EXPECT_NEAR(ev[m].cost, ev[0].cost, 1e-12 * ev[0].cost)
+            << CameraModelName(type) << " " << huber << " mode " << m;
+        const Eigen::Map<const Eigen::VectorXd> g(ev[m].gradient.data(), ev[m].gradient.size());
+        ASSERT_EQ(g0.size(), g.size());
+        EXPECT_LT((g - g0).cwiseAbs().maxCoeff(), 1e-9 * g0.cwiseAbs().maxCoeff())
+            << CameraModelName(type) << " " << huber << " mode " << m;
+        EXPECT_LT(testing::MaxAbs(ev[m].H - ev[0].H), 1e-9 * testing::MaxAbs(ev[0].H))
+            << CameraModelName(type) << " " << huber << " mode " << m;
+      }
+      // The split halves hold the whole block's rows: the same normal equations to rounding.
+      EXPECT_LT(testing::MaxAbs(ev[2].H - ev[1].H), 1e-13 * testing::MaxAbs(ev[1].H));
     }
   }
 }
 
 // One Levenberg-Marquardt iteration of Ceres over 40 noisy frames (spline knots and intrinsics
-// free, extrinsics and time offset held): the same step with compressed and per-corner blocks.
+// free, extrinsics and time offset held): the same step with compressed (whole and split) and
+// per-corner blocks; and four iterations (candidate points evaluated, some maybe rejected) the
+// same with split and whole blocks.
 TYPED_TEST(FrameCornersTest, OneSolverStepEqualsPerCorner) {
   const CameraModelType type = CameraModelType::kPinholeRadtan;
   const Eigen::VectorXd truth = testing::CameraParams(type);
@@ -253,37 +286,46 @@ TYPED_TEST(FrameCornersTest, OneSolverStepEqualsPerCorner) {
   const Eigen::Index num_knot_values = 7 * this->spline_.NumKnots();
   const Eigen::VectorXd knots0 = Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
   for (const double huber : {0.0, 3.0}) {
-    Eigen::VectorXd result[2];
-    for (int compressed = 0; compressed < 2; ++compressed) {
+    Eigen::VectorXd result[3];
+    Eigen::VectorXd four[3];
+    for (int run = 0; run < 5; ++run) {
+      const int compressed = run < 3 ? run : run - 2;  // runs 3, 4: 4 iterations, whole / split
+      const int iterations = run < 3 ? 1 : 4;
       Eigen::Map<Eigen::VectorXd>(knots, num_knot_values) = knots0;
       // Start away from the truth: intrinsics off by a few px / percent.
       Eigen::VectorXd params = truth;
       params.head<4>() += Eigen::Vector4d(3.0, -2.0, 1.5, -1.0);
       params(4) += 0.01;
-      ceres::Problem::Options po;
-      po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-      ceres::Problem P(po);
+      ceres::Problem P(this->ProblemOptions());
       this->AddParameters(&P, params.data(), static_cast<int>(params.size()));
       for (const auto& [stamp, corners] : frames)
-        this->AddFrame(&P, compressed == 1, type, corners, stamp, huber, params.data());
+        this->AddFrame(&P, compressed, type, corners, stamp, huber, params.data());
       P.SetParameterBlockConstant(this->q_B_C_.coeffs().data());
       P.SetParameterBlockConstant(this->t_B_C_.data());
       P.SetParameterBlockConstant(&this->offset_);
       ceres::Solver::Options so;
       so.linear_solver_type = ceres::DENSE_QR;
-      so.max_num_iterations = 1;
+      so.max_num_iterations = iterations;
       so.logging_type = ceres::SILENT;
       ceres::Solver::Summary summary;
       ceres::Solve(so, &P, &summary);
-      ASSERT_EQ(summary.iterations.size(), 2u);
-      EXPECT_TRUE(summary.iterations.back().step_is_successful);
-      result[compressed].resize(params.size() + num_knot_values);
-      result[compressed] << params, Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
+      if (iterations == 1) {
+        ASSERT_EQ(summary.iterations.size(), 2u);
+        EXPECT_TRUE(summary.iterations.back().step_is_successful);
+      }
+      Eigen::VectorXd& out = iterations == 1 ? result[compressed] : four[compressed];
+      out.resize(params.size() + num_knot_values);
+      out << params, Eigen::Map<const Eigen::VectorXd>(knots, num_knot_values);
       // A real step: the cost fell by far more than the agreement tolerance.
       EXPECT_LT(summary.final_cost, 0.9 * summary.initial_cost);
     }
-    // Both moved (the intrinsics by ~px) and agree to 1e-9 of the largest value (the focal).
-    EXPECT_LT((result[1] - result[0]).cwiseAbs().maxCoeff(), 1e-9 * truth.cwiseAbs().maxCoeff())
+    // All moved (the intrinsics by ~px) and agree to 1e-9 of the largest value (the focal).
+    for (int m = 1; m < 3; ++m) {
+      EXPECT_LT((result[m] - result[0]).cwiseAbs().maxCoeff(), 1e-9 * truth.cwiseAbs().maxCoeff())
+          << "huber " << huber << " mode " << m;
+    }
+    EXPECT_GT((four[1] - result[1]).cwiseAbs().maxCoeff(), 1e-6);  // the later iterations moved
+    EXPECT_LT((four[2] - four[1]).cwiseAbs().maxCoeff(), 1e-9 * truth.cwiseAbs().maxCoeff())
         << "huber " << huber;
   }
 }

@@ -82,6 +82,7 @@ class InertialBlockTest : public ::testing::Test {
   template <class R>
   struct Samples {
     std::vector<typename R::Functor> functors;
+    std::vector<typename InertialBlockResidual<R>::Raw> raw;  // the same samples, raw
     std::vector<int> seg, bseg;
     std::vector<int> sizes;
   };
@@ -110,6 +111,7 @@ class InertialBlockTest : public ::testing::Test {
             -r[k] / Whitening(setup, k) + (gauss(rng) + outlier) / Whitening(setup, k);
       }
       out.functors.push_back(typename R::Functor{setup});
+      out.raw.push_back(RawOf(t, setup));
       out.seg.push_back(seg);
       out.bseg.push_back(bseg);
       ++i;
@@ -117,6 +119,19 @@ class InertialBlockTest : public ::testing::Test {
     return out;
   }
 
+  static ImuSample RawOf(std::int64_t t_ns, const ImuSampleSetup& s) {
+    ImuSample z;
+    z.t_ns = t_ns;
+    z.w_m = s.z.w_m;
+    z.a_m = s.z.a_m;
+    return z;
+  }
+  static GyroSample RawOf(std::int64_t t_ns, const GyroSampleSetup& s) {
+    GyroSample z;
+    z.t_ns = t_ns;
+    z.w_m = s.w_m;
+    return z;
+  }
   static double& Measured(ImuSampleSetup* s, int k) {
     return k < 3 ? s->z.w_m(k) : s->z.a_m(k - 3);
   }
@@ -186,10 +201,10 @@ class InertialBlockTest : public ::testing::Test {
   }
 
   // Per-sample blocks (K = 0) or compressed (stacked: uncompressed) blocks of K segments over the
-  // same samples.
+  // same samples, owning their functors or (held) reading the raw samples.
   template <class R>
-  void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber,
-                  bool stacked = false) {
+  void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber, bool stacked = false,
+                  bool held = false) {
     const std::size_t n = s.functors.size();
     if (K == 0) {
       for (std::size_t i = 0; i < n; ++i) {
@@ -220,9 +235,22 @@ class InertialBlockTest : public ::testing::Test {
         const bool rotation = sample[b] == q_B_S_.coeffs().data() || sample[b] == imu_.q_rotation();
         manifolds.push_back(rotation ? &left_ : nullptr);
       }
-      P->AddResidualBlock(new InertialBlockResidual<R>(std::move(f), std::move(offsets), segments,
-                                                       s.sizes, manifolds, huber, stacked),
-                          nullptr, blocks);
+      if (held) {
+        HeldInertialSamples<typename InertialBlockResidual<R>::Raw> h;
+        h.samples = s.raw.data() + begin;
+        h.trajectory = spline_.timing();
+        h.first_segment = first;
+        h.bias = bg_.timing();
+        h.bias_segment = s.bseg[begin];
+        P->AddResidualBlock(
+            new InertialBlockResidual<R>(s.functors[begin], h, std::move(offsets), segments,
+                                         s.sizes, manifolds, huber, stacked),
+            nullptr, blocks);
+      } else {
+        P->AddResidualBlock(new InertialBlockResidual<R>(std::move(f), std::move(offsets), segments,
+                                                         s.sizes, manifolds, huber, stacked),
+                            nullptr, blocks);
+      }
       begin = end;
     }
   }
@@ -237,12 +265,12 @@ class InertialBlockTest : public ::testing::Test {
 
   template <class R>
   Eval Evaluate(const Samples<R>& s, int K, double huber, bool intrinsics_constant,
-                bool stacked = false) {
+                bool stacked = false, bool held = false) {
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem P(po);
     AddParameters(&P);
-    AddSamples<R>(&P, s, K, huber, stacked);
+    AddSamples<R>(&P, s, K, huber, stacked, held);
     if (intrinsics_constant) {
       for (double* b : {imu_.Dw(), imu_.Da(), imu_.Tg(), imu_.q_rotation(), gyro_.Dw()}) {
         if (b != nullptr)
@@ -310,6 +338,29 @@ class InertialBlockTest : public ::testing::Test {
         EXPECT_EQ(testing::MaxAbs(a.residuals - b.residuals), 0.0);
         EXPECT_EQ(testing::MaxAbs(a.J - b.J), 0.0);
         EXPECT_NEAR(b.cost, a.cost, 1e-12 * a.cost);
+      }
+    }
+  }
+
+  // Held samples (placed on their segments by the block) against owned functors: residuals and
+  // Jacobian equal to the last bit, compressed (L2, Huber) and stacked.
+  template <class R>
+  void ExpectHeldSame(const Samples<R>& s, const char* what) {
+    for (const bool stacked : {false, true}) {
+      for (const double huber : {0.0, 3.0}) {
+        if (stacked && huber > 0.0)
+          continue;
+        SCOPED_TRACE(std::string(what) + (stacked ? " stacked" : " compressed") + " huber " +
+                     std::to_string(huber));
+        const Eval a = Evaluate<R>(s, 3, huber, false, stacked, false);
+        const Eval b = Evaluate<R>(s, 3, huber, false, stacked, true);
+        ASSERT_EQ(a.residuals.size(), b.residuals.size());
+        ASSERT_EQ(a.J.rows(), b.J.rows());
+        ASSERT_EQ(a.J.cols(), b.J.cols());
+        EXPECT_GT(testing::MaxAbs(a.J), 0.0);
+        EXPECT_EQ(testing::MaxAbs(a.residuals - b.residuals), 0.0);
+        EXPECT_EQ(testing::MaxAbs(a.J - b.J), 0.0);
+        EXPECT_EQ(a.cost, b.cost);
       }
     }
   }
@@ -394,6 +445,14 @@ TYPED_TEST(InertialBlockTest, StackedBlocksHoldThePerSampleRowsExactly) {
   this->ExpectStackedSame(this->BaseSamples(), Name(Kind::kBaseImu));
   this->ExpectStackedSame(this->AuxImuSamples(), Name(Kind::kAuxImu));
   this->ExpectStackedSame(this->AuxGyroSamples(), Name(Kind::kAuxGyro));
+}
+
+// A block over samples the calibrator holds (1 byte per sample instead of a functor) is the block
+// over owned functors to the bit: each sample is placed on its segments by the same arithmetic.
+TYPED_TEST(InertialBlockTest, HeldSamplesGiveTheOwnedBlockExactly) {
+  this->ExpectHeldSame(this->BaseSamples(), Name(Kind::kBaseImu));
+  this->ExpectHeldSame(this->AuxImuSamples(), Name(Kind::kAuxImu));
+  this->ExpectHeldSame(this->AuxGyroSamples(), Name(Kind::kAuxGyro));
 }
 
 TEST(InertialBlockStackedTest, RefusesARobustLoss) {

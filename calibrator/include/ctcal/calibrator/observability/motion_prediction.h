@@ -58,4 +58,11 @@ void CompleteObservability(const RigConfig& rig, const std::map<std::string, Sen
                            RigConfig* result, const std::function<void(const std::string&)>& log,
                            std::vector<std::string>* warnings);
 
+// The same with AnalyseMotion run beforehand into `motion` (its motion and
+// predicted_unobservable are taken over): for a calibrator that releases the raw data before it
+// finishes (a long recording's memory, docs/performance.md step 7e).
+void CompleteObservability(const Observability& motion, RigConfig* result,
+                           const std::function<void(const std::string&)>& log,
+                           std::vector<std::string>* warnings);
+
 }  // namespace ctcal

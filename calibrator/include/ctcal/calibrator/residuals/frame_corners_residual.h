@@ -45,6 +45,22 @@
 // The block's Jacobian of each parameter block is R times these (then lifted onto the manifold's
 // ambient coordinates as in residual_support.h).
 //
+// Split rows (FrameRows::kPose + FrameRows::kIntrinsics, docs/performance.md step 7e). R is upper
+// triangular with the pose columns first, so its rows 6 .. kNx - 1 are zero in the pose columns:
+// they depend on the intrinsics' columns only. Ceres stores a residual block's Jacobian densely
+// over all of its parameter blocks (15 rows x 39 tangent columns for pinhole-radtan on a cubic
+// split spline), so the frame can be handed over as two blocks: the pose rows [R_pp R_pi | z_p]
+// over every block (6 rows) and the intrinsic rows [R_ii | z_i; 0 | last] over `params` only
+// (kNx - 5 rows): 6 x 39 + 9 x 8 instead of 15 x 39 values (-48 %), with the same cost, gradient
+// and Gauss-Newton Hessian (the row sets are disjoint). The intrinsic rows' values still depend
+// on the pose, which that block reads from the pose blocks' own memory: this is exact only when
+// Ceres writes every evaluation point there before evaluating, which it does when the problem
+// has an EvaluationCallback (the contract of ceres::EvaluationCallback); the calibrator sets one.
+// Each of the two blocks factors the frame on its own (no state is shared between blocks, which
+// Ceres evaluates on several threads in any order); a residual-only evaluation (Ceres' candidate
+// steps) returns the whole cost from the pose rows, r = [sqrt(sum rho); 0], and zeros from the
+// intrinsic rows, without a second factorisation.
+//
 // A corner that does not project validly makes Evaluate return false (see corner_residual.h).
 // The autodiff path (--autodiff) keeps one Jet block per corner (CornerResidual's functor): the
 // QR of Jets would be the same residual at a much higher price, and the per-corner blocks are the
@@ -62,6 +78,9 @@
 #include "ctcal/sensors/camera_model.h"
 
 namespace ctcal {
+
+// Which rows of a frame's factor a block holds (file comment): all, or one half of the split.
+enum class FrameRows { kAll, kPose, kIntrinsics };
 
 template <int N, Se3Representation Rep>
 class FrameCornersResidual {
@@ -117,16 +136,18 @@ class FrameCornersResidual {
           num_corners_(static_cast<int>(owned_.size())),
           clock_(clock),
           huber_(huber_threshold) {
-      set_num_residuals(kNx + 1);
-      *mutable_parameter_block_sizes() = BlockSizes(Model::kNumParams);
+      SetRows(FrameRows::kAll, {});
     }
     // The same on `count` corners held by the caller, which must outlive the block: a long
     // recording's millions of corners are then held once (docs/performance.md, step 7).
+    // rows: kAll, or one half of the split (file comment); kIntrinsics reads the pose from
+    // `blocks` (Blocks(), the memory Ceres writes each evaluation point into) and has the
+    // parameter block `params` only.
     Analytic(const CornerMeasurement* corners, int count, const SegmentClock& clock,
-             double huber_threshold)
+             double huber_threshold, FrameRows rows = FrameRows::kAll,
+             const std::vector<double*>& blocks = {})
         : corners_(corners), num_corners_(count), clock_(clock), huber_(huber_threshold) {
-      set_num_residuals(kNx + 1);
-      *mutable_parameter_block_sizes() = BlockSizes(Model::kNumParams);
+      SetRows(rows, blocks);
     }
     Analytic(const Analytic&) = delete;
     Analytic& operator=(const Analytic&) = delete;
@@ -134,6 +155,42 @@ class FrameCornersResidual {
     int NumCorners() const { return num_corners_; }
 
     bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+      if (rows_ == FrameRows::kAll)
+        return EvaluateRows<0, kNx + 1>(p, residuals, jacobians);
+      if (rows_ == FrameRows::kPose)
+        return EvaluateRows<0, 6>(p, residuals, jacobians);
+      // The intrinsic rows: the pose from its blocks' memory, the intrinsics from Ceres.
+      if (jacobians == nullptr) {
+        std::fill_n(residuals, kNx - 5, 0.0);
+        return true;
+      }
+      const double* q[kNumBlocks];
+      for (int b = 0; b < kParams; ++b)
+        q[b] = pose_[static_cast<std::size_t>(b)];
+      q[kParams] = p[0];
+      double* J[kNumBlocks] = {};
+      J[kParams] = jacobians[0];
+      return EvaluateRows<6, kNx - 5>(q, residuals, J);
+    }
+
+   private:
+    void SetRows(FrameRows rows, const std::vector<double*>& blocks) {
+      rows_ = rows;
+      if (rows == FrameRows::kIntrinsics) {
+        residual_internal::CheckCount("FrameCornersResidual", "blocks", blocks.size(), kNumBlocks);
+        pose_.assign(blocks.begin(), blocks.begin() + kParams);
+        set_num_residuals(kNx - 5);
+        *mutable_parameter_block_sizes() = {Model::kNumParams};
+        return;
+      }
+      set_num_residuals(rows == FrameRows::kPose ? 6 : kNx + 1);
+      *mutable_parameter_block_sizes() = BlockSizes(Model::kNumParams);
+    }
+
+    // Rows R0 .. R0 + Rows - 1 of the factor [R | z; 0 | last] (row kNx is the remainder row),
+    // over every block (p, jacobians: all kNumBlocks of them).
+    template <int R0, int Rows>
+    bool EvaluateRows(double const* const* p, double* residuals, double** jacobians) const {
       using namespace residual_internal;
       using Block = typename Spline::template Jacobians<double>::Block;
       const bool want_traj = AnyWanted(jacobians, 0, kNumTrajBlocks);
@@ -156,9 +213,17 @@ class FrameCornersResidual {
       // [J | e] of every corner, weighted for the robust stage, QR-compressed to [R | z] and the
       // remainder row (frame_corners_compression.h; this file's comment derives it).
       MatX R;
-      if (!CompressFrameCorners<Model>(corners_, num_corners_, p[kParams], R_C_W, t_C_W, huber_,
-                                       residuals, &R))
+      double r[kNx + 1];
+      if (!CompressFrameCorners<Model>(corners_, num_corners_, p[kParams], R_C_W, t_C_W, huber_, r,
+                                       &R))
         return false;
+      if (Rows != kNx + 1 && jacobians == nullptr) {
+        // A half of the split, residual only: the whole cost in its first row (file comment).
+        std::fill_n(residuals, Rows, 0.0);
+        residuals[0] = Eigen::Map<const Eigen::Matrix<double, kNx + 1, 1>>(r).norm();
+        return true;
+      }
+      std::copy(r + R0, r + R0 + Rows, residuals);
       if (jacobians == nullptr)
         return true;
 
@@ -170,39 +235,39 @@ class FrameCornersResidual {
         J_x_knots.template topRows<3>() = -R_C_B * J_R_knots;
         J_x_knots.template bottomRows<3>() = R_C_B * tBC_hat * J_R_knots - R_C_W * J_p_knots;
         const Eigen::Matrix<double, kNx, 6 * N> J_t = R_pose * J_x_knots;
-        LiftTrajectoryJacobian<N, Rep, kNx + 1>(Padded<6 * N>(J_t), p, jacobians);
+        LiftTrajectoryJacobian<N, Rep, Rows>(PaddedRows<6 * N, R0, Rows>(J_t), p, jacobians);
       }
-      if (jacobians[kQ_B_C] != nullptr) {
+      if (Wanted(jacobians, kQ_B_C)) {
         const Eigen::Matrix<double, kNx, 3> J_t = -R_pose.template leftCols<3>() * R_C_B;
-        LiftLeftRotation<kNx + 1>(Padded<3>(J_t), p[kQ_B_C], jacobians[kQ_B_C]);
+        LiftLeftRotation<Rows>(PaddedRows<3, R0, Rows>(J_t), p[kQ_B_C], jacobians[kQ_B_C]);
       }
-      if (jacobians[kT_B_C] != nullptr) {
+      if (Wanted(jacobians, kT_B_C)) {
         const Eigen::Matrix<double, kNx, 3> J_t = -R_pose.template rightCols<3>() * R_C_B;
-        Jacobian<kNx + 1, 3>(jacobians[kT_B_C]) = Padded<3>(J_t);
+        Jacobian<Rows, 3>(jacobians[kT_B_C]) = PaddedRows<3, R0, Rows>(J_t);
       }
       if (want_time) {
         Eigen::Matrix<double, 6, 1> J_x_t;
         J_x_t.template head<3>() = -R_C_B * kin.w_B;
         J_x_t.template tail<3>() = R_C_B * tBC_hat * kin.w_B - R_C_W * kin.v_W;
         const Eigen::Matrix<double, kNx, 1> J_t = R_pose * J_x_t;
-        Jacobian<kNx + 1, 1>(jacobians[kTimeOffset]) = Padded<1>(J_t);
+        Jacobian<Rows, 1>(jacobians[kTimeOffset]) = PaddedRows<1, R0, Rows>(J_t);
       }
-      if (jacobians[kParams] != nullptr) {
+      if (Wanted(jacobians, kParams)) {
         const Eigen::Matrix<double, kNx, Model::kNumParams> J_t =
             R.template rightCols<Model::kNumParams>();
-        Jacobian<kNx + 1, Model::kNumParams>(jacobians[kParams]) = Padded<Model::kNumParams>(J_t);
+        Jacobian<Rows, Model::kNumParams>(jacobians[kParams]) =
+            PaddedRows<Model::kNumParams, R0, Rows>(J_t);
       }
       return true;
     }
 
-   private:
-    // A kNx-row Jacobian with the remainder row's zeros appended.
-    template <int Cols>
-    static Eigen::Matrix<double, kNx + 1, Cols> Padded(const Eigen::Matrix<double, kNx, Cols>& J) {
+    // Rows R0 .. R0 + Rows - 1 of a kNx-row Jacobian with the remainder row's zeros appended.
+    template <int Cols, int R0, int Rows>
+    static Eigen::Matrix<double, Rows, Cols> PaddedRows(const Eigen::Matrix<double, kNx, Cols>& J) {
       Eigen::Matrix<double, kNx + 1, Cols> out;
       out.template topRows<kNx>() = J;
       out.template bottomRows<1>().setZero();
-      return out;
+      return out.template middleRows<Rows>(R0);
     }
 
     std::vector<CornerMeasurement> owned_;  // empty when the caller holds the corners
@@ -210,6 +275,8 @@ class FrameCornersResidual {
     int num_corners_;
     SegmentClock clock_;
     double huber_;
+    FrameRows rows_ = FrameRows::kAll;
+    std::vector<const double*> pose_;  // kIntrinsics: the pose blocks' memory (Blocks() order)
   };
 };
 
@@ -227,22 +294,27 @@ ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
 }
 
 // The same on `count` corners held by the caller (not copied): they must outlive the block.
+// rows: the whole factor, or one half of the split (file comment; kIntrinsics reads the pose from
+// `blocks`, FrameCornersResidual::Blocks(), and its only parameter block is `params`).
 template <int N, Se3Representation Rep>
 ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
                                               const CornerMeasurement* corners, int count,
-                                              const SegmentClock& clock, double huber_threshold) {
+                                              const SegmentClock& clock, double huber_threshold,
+                                              FrameRows rows = FrameRows::kAll,
+                                              const std::vector<double*>& blocks = {}) {
   return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
     using Model = decltype(model);
     return new typename FrameCornersResidual<N, Rep>::template Analytic<Model>(
-        corners, count, clock, huber_threshold);
+        corners, count, clock, huber_threshold, rows, blocks);
   });
 }
 
-#define CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(N, REP)                                         \
-  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
-      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);        \
-  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
-      CameraModelType, const CornerMeasurement*, int, const SegmentClock&, double);
+#define CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(N, REP)                                           \
+  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(   \
+      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);          \
+  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(   \
+      CameraModelType, const CornerMeasurement*, int, const SegmentClock&, double, FrameRows, \
+      const std::vector<double*>&);
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(4, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(5, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(6, kSplit)

@@ -39,6 +39,14 @@
 // parameter blocks (~120 per base-IMU sample, sorted once per solve), and evaluates, checks and
 // scales every block on its own (docs/performance.md step 7b).
 //
+// Samples held by the caller (`HeldInertialSamples`): a 1 kHz IMU's 600 k samples per 10 min would
+// otherwise be held twice, once as the calibrator's selected samples and once as the blocks'
+// functors (~144 bytes each: the raw sample, its two segment clocks, the model and whitening). A
+// block can instead keep one functor of the sensor (model, whitening) and read its samples where
+// the caller keeps them, placing each on its segments when it is evaluated (PlaceSample, the same
+// arithmetic as the caller's, so the functor is equal to the bit): 1 byte per sample instead of
+// ~144 (docs/performance.md step 7e).
+//
 // Residual-only evaluations (jacobians == nullptr, Ceres' candidate steps) skip the factorisation
 // and return r = [0; sqrt(c)]: the same cost, but a residual vector is only meaningful together
 // with its Jacobian. Per-sample whitened residuals (statistics) come from the samples' own
@@ -53,14 +61,59 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "ctcal/calibrator/residuals/aux_gyro_residual.h"
+#include "ctcal/calibrator/residuals/inertial_support.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
+#include "ctcal/sensors/dataset.h"
 #include "ctcal/spline/so3_manifold.h"
 
 namespace ctcal {
+
+// A raw sample placed on its trajectory and bias segments: the per-sample part of a sample's
+// setup (the sensor's model and whitening are the rest).
+inline void PlaceSample(const ImuSample& z, const SegmentClock& clock,
+                        const SegmentClock& bias_clock, ImuSampleSetup* s) {
+  s->z.w_m = z.w_m;
+  s->z.a_m = z.a_m;
+  s->clock = clock;
+  s->bias_clock = bias_clock;
+}
+inline void PlaceSample(const GyroSample& z, const SegmentClock& clock,
+                        const SegmentClock& bias_clock, GyroSampleSetup* s) {
+  s->w_m = z.w_m;
+  s->clock = clock;
+  s->bias_clock = bias_clock;
+}
+
+// The raw sample type of a residual's setup.
+template <class Setup>
+struct RawSampleOf;
+template <>
+struct RawSampleOf<ImuSampleSetup> {
+  using type = ImuSample;
+};
+template <>
+struct RawSampleOf<GyroSampleSetup> {
+  using type = GyroSample;
+};
+
+// The raw samples of one block where the caller holds them (file comment): sample i is
+// samples[i], on trajectory segment first_segment + offsets[i] of `trajectory` and on bias segment
+// bias_segment of `bias`, its stamp on the sensor's clock (the clocks are computed from the stamp
+// as SegmentClock::At does for every sample residual).
+template <class Raw>
+struct HeldInertialSamples {
+  const Raw* samples = nullptr;
+  KnotTiming trajectory;
+  int first_segment = 0;
+  KnotTiming bias;
+  int bias_segment = 0;
+};
 
 // The run length K of a sensor's compressed blocks for the Jacobian's size, or 0 where per-sample
 // blocks are better. samples_per_segment: the sensor's rate times the knot spacing; sample_rows:
@@ -98,6 +151,7 @@ class InertialBlockResidual final : public ceres::CostFunction {
  public:
   using Spline = typename Sample::Spline;
   using Functor = typename Sample::Functor;
+  using Raw = typename RawSampleOf<typename Sample::Setup>::type;  // ImuSample or GyroSample
   static constexpr int N = Spline::kTangentSize / 6;
   static constexpr int kGroups = Spline::kNumBlocks / N;  // split: rotations, positions; joint: 1
   static constexpr int kSampleRows = Sample::kNumResiduals;
@@ -134,44 +188,32 @@ class InertialBlockResidual final : public ceres::CostFunction {
         sample_sizes_(sample_sizes),
         huber_(huber_threshold),
         stacked_(stacked) {
-    const int num_common = static_cast<int>(sample_sizes.size()) - kNumTrajBlocks;
-    if (samples_.empty() || samples_.size() != offsets_.size() || num_segments < 1 ||
-        num_common < 0 || static_cast<int>(common_manifolds.size()) != num_common)
+    if (samples_.size() != offsets_.size())
       throw std::invalid_argument("InertialBlockResidual: inconsistent samples/offsets/blocks");
-    if (stacked && huber_threshold > 0.0)
-      throw std::invalid_argument("InertialBlockResidual: the stacked form is plain L2 only");
-    for (std::size_t i = 0; i < offsets_.size(); ++i) {
-      if (offsets_[i] >= num_segments || (i > 0 && offsets_[i] < offsets_[i - 1]))
-        throw std::invalid_argument("InertialBlockResidual: sample " + std::to_string(i) +
-                                    " has segment offset " + std::to_string(offsets_[i]) +
-                                    " out of order or beyond " + std::to_string(num_segments));
-    }
-    const int knots = N + num_segments - 1;
-    std::vector<int> sizes;
-    for (int g = 0; g < kGroups; ++g) {
-      sizes.insert(sizes.end(), knots, Spline::AmbientSize(g * N));
-      manifolds_.insert(manifolds_.end(), knots, TrajectoryManifold(g));
-    }
-    sizes.insert(sizes.end(), sample_sizes.begin() + kNumTrajBlocks, sample_sizes.end());
-    manifolds_.insert(manifolds_.end(), common_manifolds.begin(), common_manifolds.end());
-    int col = 0, tan = 0;
-    for (std::size_t u = 0; u < sizes.size(); ++u) {
-      block_col_.push_back(col);
-      tan_col_.push_back(tan);
-      col += sizes[u];
-      tan += manifolds_[u] != nullptr ? manifolds_[u]->TangentSize() : sizes[u];
-    }
-    num_cols_ = col;
-    num_factor_rows_ = tan;
-    set_num_residuals(stacked_ ? kSampleRows * static_cast<int>(samples_.size())
-                               : num_factor_rows_ + 1);
-    *mutable_parameter_block_sizes() = sizes;
-    sample_col_.push_back(0);
-    for (const int s : sample_sizes_)
-      sample_col_.push_back(sample_col_.back() + s);
+    Init(common_manifolds);
   }
 
-  int NumSamples() const { return static_cast<int>(samples_.size()); }
+  // The same over samples the caller holds (file comment): `sensor` is any functor of the sensor
+  // (its per-sample fields are replaced), held.samples[0 .. offsets.size()) the raw samples, which
+  // must outlive the block.
+  InertialBlockResidual(const Functor& sensor, const HeldInertialSamples<Raw>& held,
+                        std::vector<std::uint8_t> offsets, int num_segments,
+                        const std::vector<int>& sample_sizes,
+                        const std::vector<const ceres::Manifold*>& common_manifolds,
+                        double huber_threshold, bool stacked = false)
+      : sensor_(sensor),
+        held_(held),
+        offsets_(std::move(offsets)),
+        num_segments_(num_segments),
+        sample_sizes_(sample_sizes),
+        huber_(huber_threshold),
+        stacked_(stacked) {
+    if (held.samples == nullptr)
+      throw std::invalid_argument("InertialBlockResidual: no held samples");
+    Init(common_manifolds);
+  }
+
+  int NumSamples() const { return static_cast<int>(offsets_.size()); }
 
   // The knot blocks' manifolds, as the residuals lift their Jacobians (residual_support.h).
   static const ceres::Manifold* TrajectoryManifold(int group) {
@@ -185,6 +227,60 @@ class InertialBlockResidual final : public ceres::CostFunction {
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
     if (stacked_)
       return EvaluateStacked(p, residuals, jacobians);
+    return EvaluateCompressed(p, residuals, jacobians);
+  }
+
+ private:
+  // The checks and the block layout shared by both constructors.
+  void Init(const std::vector<const ceres::Manifold*>& common_manifolds) {
+    const int num_segments = num_segments_;
+    const int num_common = static_cast<int>(sample_sizes_.size()) - kNumTrajBlocks;
+    if (offsets_.empty() || num_segments < 1 || num_common < 0 ||
+        static_cast<int>(common_manifolds.size()) != num_common)
+      throw std::invalid_argument("InertialBlockResidual: inconsistent samples/offsets/blocks");
+    if (stacked_ && huber_ > 0.0)
+      throw std::invalid_argument("InertialBlockResidual: the stacked form is plain L2 only");
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
+      if (offsets_[i] >= num_segments || (i > 0 && offsets_[i] < offsets_[i - 1]))
+        throw std::invalid_argument("InertialBlockResidual: sample " + std::to_string(i) +
+                                    " has segment offset " + std::to_string(offsets_[i]) +
+                                    " out of order or beyond " + std::to_string(num_segments));
+    }
+    const int knots = N + num_segments - 1;
+    std::vector<int> sizes;
+    for (int g = 0; g < kGroups; ++g) {
+      sizes.insert(sizes.end(), knots, Spline::AmbientSize(g * N));
+      manifolds_.insert(manifolds_.end(), knots, TrajectoryManifold(g));
+    }
+    sizes.insert(sizes.end(), sample_sizes_.begin() + kNumTrajBlocks, sample_sizes_.end());
+    manifolds_.insert(manifolds_.end(), common_manifolds.begin(), common_manifolds.end());
+    int col = 0, tan = 0;
+    for (std::size_t u = 0; u < sizes.size(); ++u) {
+      block_col_.push_back(col);
+      tan_col_.push_back(tan);
+      col += sizes[u];
+      tan += manifolds_[u] != nullptr ? manifolds_[u]->TangentSize() : sizes[u];
+    }
+    num_cols_ = col;
+    num_factor_rows_ = tan;
+    set_num_residuals(stacked_ ? kSampleRows * NumSamples() : num_factor_rows_ + 1);
+    *mutable_parameter_block_sizes() = sizes;
+  }
+
+  // Sample i's functor: the owned one, or the sensor's with held sample i placed on its segments
+  // (into `placed`).
+  const Functor& SampleAt(std::size_t i, std::optional<Functor>* placed) const {
+    if (!sensor_)
+      return samples_[i];
+    placed->emplace(*sensor_);
+    const Raw& z = held_.samples[i];
+    PlaceSample(z, SegmentClock::At(z.t_ns, held_.trajectory, held_.first_segment + offsets_[i]),
+                SegmentClock::At(z.t_ns, held_.bias, held_.bias_segment), &(*placed)->s);
+    return **placed;
+  }
+
+  // The compressed form (file comment).
+  bool EvaluateCompressed(double const* const* p, double* residuals, double** jacobians) const {
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     const int num_sample_blocks = static_cast<int>(sample_sizes_.size());
     const int num_blocks = static_cast<int>(block_col_.size());
@@ -209,13 +305,14 @@ class InertialBlockResidual final : public ceres::CostFunction {
       for (int b = 0; b < num_sample_blocks; ++b) {
         J_b[static_cast<std::size_t>(b)].resize(kSampleRows, sample_sizes_[b]);
       }
-      A.setZero(kSampleRows * static_cast<Eigen::Index>(samples_.size()), n + 1);
+      A.setZero(kSampleRows * static_cast<Eigen::Index>(NumSamples()), n + 1);
     }
 
     double cost = 0.0;      // sum rho(s_i)
     double weighted = 0.0;  // sum w_i^2 s_i: the rows' part of it
     double r[kSampleRows];
-    for (std::size_t i = 0; i < samples_.size(); ++i) {
+    std::optional<Functor> placed;
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
       const int off = offsets_[i];
       for (int b = 0; b < num_sample_blocks; ++b) {
         const int u = union_block(b, off);
@@ -224,7 +321,8 @@ class InertialBlockResidual final : public ceres::CostFunction {
         js[static_cast<std::size_t>(b)] =
             want && jacobians[u] != nullptr ? J_b[static_cast<std::size_t>(b)].data() : nullptr;
       }
-      if (!Sample::Analytic::EvaluateSample(samples_[i], ps.data(), r, want ? js.data() : nullptr))
+      if (!Sample::Analytic::EvaluateSample(SampleAt(i, &placed), ps.data(), r,
+                                            want ? js.data() : nullptr))
         return false;
       const Eigen::Map<const Eigen::Matrix<double, kSampleRows, 1>> ri(r);
       const double sq = ri.squaredNorm();
@@ -295,7 +393,6 @@ class InertialBlockResidual final : public ceres::CostFunction {
     return true;
   }
 
- private:
   // The block's block of sample block b for a sample on segment offset `off`.
   int UnionBlock(int b, int off) const {
     const int knots = N + num_segments_ - 1;
@@ -319,7 +416,8 @@ class InertialBlockResidual final : public ceres::CostFunction {
     }
     std::vector<const double*> ps(static_cast<std::size_t>(num_sample_blocks));
     std::vector<double*> js(static_cast<std::size_t>(num_sample_blocks));
-    for (std::size_t i = 0; i < samples_.size(); ++i) {
+    std::optional<Functor> placed;
+    for (std::size_t i = 0; i < offsets_.size(); ++i) {
       const int off = offsets_[i];
       const std::ptrdiff_t row = kSampleRows * static_cast<std::ptrdiff_t>(i);
       for (int b = 0; b < num_sample_blocks; ++b) {
@@ -329,20 +427,21 @@ class InertialBlockResidual final : public ceres::CostFunction {
                                               ? jacobians[u] + row * sample_sizes_[b]
                                               : nullptr;
       }
-      if (!Sample::Analytic::EvaluateSample(samples_[i], ps.data(), residuals + row,
+      if (!Sample::Analytic::EvaluateSample(SampleAt(i, &placed), ps.data(), residuals + row,
                                             jacobians != nullptr ? js.data() : nullptr))
         return false;
     }
     return true;
   }
 
-  std::vector<Functor> samples_;
+  std::vector<Functor> samples_;   // owned samples, or
+  std::optional<Functor> sensor_;  // the sensor's functor and
+  HeldInertialSamples<Raw> held_;  // the samples the caller holds
   std::vector<std::uint8_t> offsets_;
   int num_segments_;
   std::vector<int> sample_sizes_;
-  std::vector<int> sample_col_;  // a sample's block b starts at column sample_col_[b]
-  std::vector<int> block_col_;   // the block's block u starts at column block_col_[u]
-  std::vector<int> tan_col_;     // and at tangent column tan_col_[u]
+  std::vector<int> block_col_;  // the block's block u starts at column block_col_[u]
+  std::vector<int> tan_col_;    // and at tangent column tan_col_[u]
   std::vector<const ceres::Manifold*> manifolds_;  // nullptr: Euclidean (file comment)
   int num_cols_ = 0;
   int num_factor_rows_ = 0;
