@@ -6,6 +6,7 @@
 
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/report/report.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal_git_describe.h"  // generated at build time (cmake/GitDescribe.cmake)
 
 namespace ctcal::app {
@@ -27,26 +28,35 @@ report::RunInfo CalibrateRunInfo(int argc, char** argv) {
 }
 
 bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
-                            const report::RunInfo& run_info, const CalibrationLog& log) {
-  const auto t0 = std::chrono::steady_clock::now();
+                            const report::RunInfo& run_info, const CalibrationLog& log,
+                            int threads) {
+  report::StageClock clock;
   log("report: writing " + out_dir + "/report_data/ and rendering report.html, report.pdf");
   try {
     data.run_info.insert(data.run_info.begin(), run_info.begin(), run_info.end());
-    report::WriteReportData(out_dir, data);
+    // The report is drawn from the data as written (rounded as the files hold them), not read
+    // back: the same report as `ctcal report --out OUT` draws from the folder.
+    const report::ReportData stored = report::WriteReportData(out_dir, std::move(data), threads);
+    const report::StageTime written = clock.Lap("report data");
     report::ReportOptions options;
     options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
-    const report::ReportOutput out = report::RenderReport(out_dir, options);
+    options.threads = threads;
+    report::ReportOutput out = report::RenderReport(out_dir, stored, options);
+    out.stages.insert(out.stages.begin(), written);
     int fails = 0, warns = 0;
     for (const report::Check& c : out.checks) {
       fails += c.status == report::Status::kFail;
       warns += c.status == report::Status::kWarn;
     }
+    double wall = 0.0;
+    for (const report::StageTime& t : out.stages)
+      wall += t.wall_s;
     char line[256];
     std::snprintf(line, sizeof line,
                   "report: %d pages, %zu figures, checks %d failed / %d warnings, %.1f s",
-                  out.pdf_pages, out.figure_ids.size(), fails, warns,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+                  out.pdf_pages, out.figure_ids.size(), fails, warns, wall);
     log(line);
+    log("  " + report::FormatStageTimes(out.stages));
     return true;
   } catch (const std::exception& e) {
     log(std::string("warning: the report was not written: ") + e.what());

@@ -14,9 +14,11 @@ namespace ctcal::app {
 // describe` of the source tree at build time) and the libraries' versions.
 report::RunInfo CalibrateRunInfo(int argc, char** argv);
 
-// Writes `data` (run_info appended to `run_info`) and renders the report; every problem is logged
-// as a warning. Returns whether both files were written.
+// Writes `data` (run_info appended to `run_info`) and renders the report on `threads` threads (0:
+// the hardware's), logging the time of each stage; every problem is logged as a warning. Returns
+// whether both files were written.
 bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
-                            const report::RunInfo& run_info, const CalibrationLog& log);
+                            const report::RunInfo& run_info, const CalibrationLog& log,
+                            int threads = 0);
 
 }  // namespace ctcal::app

@@ -20,6 +20,7 @@
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/kalibr_files.h"
@@ -34,7 +35,7 @@ namespace {
 int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
                   const std::map<std::string, SensorData>& data, const std::string& out_dir,
                   const CalibrationLog& log, std::ofstream& log_file,
-                  const report::RunInfo& run_info) {
+                  const report::RunInfo& run_info, int threads) {
   CameraOnlyResult result;
   std::ostringstream stages;
   try {
@@ -53,7 +54,7 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   }
   log(FormatParameterTable(result.rig));
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
-  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, threads);
   return kExitOk;
 }
 
@@ -116,7 +117,8 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
   try {
     if (method == "discrete") {
       WriteResult(discrete, out_dir, log);
-      WriteCalibrationReport(out_dir, std::move(discrete.report_data), run_info, log);
+      WriteCalibrationReport(out_dir, std::move(discrete.report_data), run_info, log,
+                             spline_options.threads);
       return kExitOk;
     }
     WriteResult(spline, out_dir + "/spline", log);
@@ -130,8 +132,10 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
     for (const char* sub : {"/spline", "/discrete"})
       std::filesystem::copy_file(out_dir + "/crosscheck.yaml", out_dir + sub + "/crosscheck.yaml",
                                  std::filesystem::copy_options::overwrite_existing);
-    WriteCalibrationReport(out_dir + "/spline", std::move(spline.report_data), run_info, log);
-    WriteCalibrationReport(out_dir + "/discrete", std::move(discrete.report_data), run_info, log);
+    WriteCalibrationReport(out_dir + "/spline", std::move(spline.report_data), run_info, log,
+                           spline_options.threads);
+    WriteCalibrationReport(out_dir + "/discrete", std::move(discrete.report_data), run_info, log,
+                           spline_options.threads);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
@@ -220,6 +224,9 @@ int RunCalibrate(int argc, char** argv) {
     log_file << line << '\n';
   };
 
+  // The command's stages outside the calibration (docs/performance.md step 7d): the log's `time:`
+  // lines.
+  report::StageClock clock;
   RigConfig rig;
   std::map<std::string, SensorData> data;
   try {
@@ -247,11 +254,13 @@ int RunCalibrate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.InputError(e.what());
   }
+  log("time: " + report::FormatStageTime(clock.Lap("load")));
   // Cameras given as images only are detected first; their corners go to OUT/<camera>/.
   if (const auto failed = Guarded(cli, log_file, [&] {
         DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log);
       }))
     return *failed;
+  const report::StageTime detection = clock.Lap("detection");
 
   // The configuration of the run, for the report.
   report::RunInfo run_info = CalibrateRunInfo(argc, argv);
@@ -275,7 +284,7 @@ int RunCalibrate(int argc, char** argv) {
           " does not apply to a rig without IMUs: calibrating the cameras alone (one result, "
           "solver.method camera_only)");
     }
-    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info);
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info, options.threads);
   }
   if (method != "spline") {
     discrete_options.threads = options.threads;
@@ -289,14 +298,17 @@ int RunCalibrate(int argc, char** argv) {
           cli, log_file, [&] { result = CalibrateSpline(rig, std::move(data), options, log); }))
     return *failed;
 
+  const report::StageTime calibration = clock.Lap("calibration");
   try {
     WriteResult(result, out_dir, log);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
+  log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
+      ", " + report::FormatStageTime(clock.Lap("results")));
   run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
   run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
-  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log);
+  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, options.threads);
   return kExitOk;
 }
 

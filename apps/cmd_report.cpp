@@ -15,16 +15,19 @@ namespace ctcal::app {
 
 int RunReport(int argc, char** argv) {
   namespace po = boost::program_options;
-  CommandLine cli("report", "--out OUT [--png-dir DIR]",
+  CommandLine cli("report", "--out OUT [--png-dir DIR] [--times]",
                   "Re-render the calibration report (OUT/report.html and OUT/report.pdf) of a "
                   "folder written by ctcal calibrate (of OUT/spline/ and OUT/discrete/ for "
                   "--method both).");
   std::string out_dir, png_dir;
+  bool times = false;
   cli.options().add_options()("out", po::value(&out_dir)->required(),
                               "calibration folder holding result.yaml and report_data/")(
       "png-dir", po::value(&png_dir),
       "also write every figure as <png-dir>/<figure id>.png (<png-dir>/<method>/<figure id>.png "
-      "for a --method both folder)");
+      "for a --method both folder)")(
+      "times", po::bool_switch(&times),
+      "print the CPU time of every figure's PDF page and PNG (the stages are always printed)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   report::ReportOptions options;
@@ -58,6 +61,12 @@ int RunReport(int argc, char** argv) {
     std::printf("wrote %s and %s (%d pages, %zu figures, %zu sections omitted, %d checks failed)\n",
                 out.html_path.c_str(), out.pdf_path.c_str(), out.pdf_pages, out.figure_ids.size(),
                 out.omitted.size(), fails);
+    std::printf("%s\n", FormatStageTimes(out.stages).c_str());
+    if (times) {
+      for (const report::FigureTime& f : out.figure_times)
+        std::printf("  %-32s PDF %.3f s  PNG %.3f s (CPU)\n", f.id.c_str(), f.pdf_cpu_s,
+                    f.png_cpu_s);
+    }
   }
   return kExitOk;
 }

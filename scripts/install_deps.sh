@@ -11,13 +11,14 @@ PACKAGES=(
   libboost-program-options-dev libboost-math-dev
   libmrcal-dev mrcal
   libgtest-dev libgmock-dev libbenchmark-dev
-  libyaml-cpp-dev libcairo2-dev libpng-dev zlib1g-dev
+  libyaml-cpp-dev libcairo2-dev libdeflate-dev zlib1g-dev
   fonts-dejavu-core
   clang-format
   poppler-utils opencv-doc visp-images-data
   chromium python3 python3-numpy python3-opencv
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
+# libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt);
 # fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot.cpp);
 # poppler-utils (pdftoppm, pdftotext), chromium and python3 (scripts/spec_sim.py, standard
 # library only) are called by tests; python3-numpy and python3-opencv are what the independent

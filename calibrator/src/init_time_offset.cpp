@@ -7,7 +7,7 @@
 #include <optional>
 
 #include "ctcal/calibrator/init/inertial_init.h"
-#include "parallel_for.h"
+#include "ctcal/sensors/parallel_for.h"
 
 namespace ctcal {
 

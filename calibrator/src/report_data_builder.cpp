@@ -5,11 +5,15 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <opencv2/core/version.hpp>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include "ctcal/sensors/gyro_intrinsics.h"
+#include "ctcal/sensors/parallel_for.h"
 
 namespace ctcal {
 namespace {
@@ -194,33 +198,57 @@ report::RunInfo LibraryVersions() {
 
 report::ReportData BuildReportData(const CalibrationState& state, const ReportInputs& inputs,
                                    const TrajectoryEvaluator& trajectory) {
-  report::ReportData out;
+  // Every sensor's rows (and the trajectory's) are one job on the hardware's threads, each into
+  // its own part, merged in order: every row is computed alone, so the result does not depend on
+  // the schedule. The evaluators only read (the spline's blocks, the keyframes).
+  std::vector<std::function<void(report::ReportData*)>> jobs;
   for (const auto& [name, corners] : inputs.corners) {
     const SensorState& s = StateOf(state, name);
     if (!s.camera)
       throw std::runtime_error("report data: sensors." + name + " has corners but no camera model");
-    out.corners[name] = Corners(s, corners, trajectory);
+    jobs.emplace_back([&, &name = name, &corners = corners, &sensor = s](report::ReportData* part) {
+      part->corners[name] = Corners(sensor, corners, trajectory);
+    });
   }
   for (const auto& [name, samples] : inputs.imu) {
     const SensorState& s = StateOf(state, name);
     if (!s.imu)
       throw std::runtime_error("report data: sensors." + name + " has IMU samples but is no IMU");
-    Imu(state, s, samples, trajectory, inputs.bias_every, Biases{s, BiasOverride(inputs, name)},
-        &out);
+    jobs.emplace_back([&, &name = name, &samples = samples, &sensor = s](report::ReportData* part) {
+      Imu(state, sensor, samples, trajectory, inputs.bias_every,
+          Biases{sensor, BiasOverride(inputs, name)}, part);
+    });
   }
   for (const auto& [name, samples] : inputs.gyro) {
     const SensorState& s = StateOf(state, name);
     if (!s.gyro)
       throw std::runtime_error("report data: sensors." + name +
                                " has gyroscope samples but is no gyroscope");
-    Gyro(s, samples, trajectory, inputs.bias_every, Biases{s, BiasOverride(inputs, name)}, &out);
+    jobs.emplace_back([&, &name = name, &samples = samples, &sensor = s](report::ReportData* part) {
+      Gyro(sensor, samples, trajectory, inputs.bias_every,
+           Biases{sensor, BiasOverride(inputs, name)}, part);
+    });
   }
   if (inputs.t1_ns > inputs.t0_ns && inputs.trajectory_rate_hz > 0.0) {
-    const auto step = std::max<std::int64_t>(1, std::llround(1e9 / inputs.trajectory_rate_hz));
-    for (std::int64_t t = inputs.t0_ns; t <= inputs.t1_ns; t += step) {
-      const Se3Kinematics<double> kin = trajectory(t, 0);
-      out.trajectory.push_back({t, kin.p_W_B, Eigen::Quaterniond(kin.R_W_B).normalized()});
-    }
+    jobs.emplace_back([&](report::ReportData* part) {
+      const auto step = std::max<std::int64_t>(1, std::llround(1e9 / inputs.trajectory_rate_hz));
+      for (std::int64_t t = inputs.t0_ns; t <= inputs.t1_ns; t += step) {
+        const Se3Kinematics<double> kin = trajectory(t, 0);
+        part->trajectory.push_back({t, kin.p_W_B, Eigen::Quaterniond(kin.R_W_B).normalized()});
+      }
+    });
+  }
+  std::vector<report::ReportData> parts(jobs.size());
+  ParallelFor(static_cast<int>(std::thread::hardware_concurrency()), jobs.size(),
+              [&](std::size_t i) { jobs[i](&parts[i]); });
+  report::ReportData out;
+  for (report::ReportData& part : parts) {
+    out.corners.merge(part.corners);
+    out.gyro.merge(part.gyro);
+    out.accel.merge(part.accel);
+    out.bias.merge(part.bias);
+    if (!part.trajectory.empty())
+      out.trajectory = std::move(part.trajectory);
   }
   return out;
 }

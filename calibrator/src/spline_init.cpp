@@ -8,7 +8,7 @@
 #include <optional>
 #include <utility>
 
-#include "parallel_for.h"
+#include "ctcal/sensors/parallel_for.h"
 
 namespace ctcal {
 namespace {

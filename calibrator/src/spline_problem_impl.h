@@ -34,11 +34,11 @@ using residual_internal::Jacobian;
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
+#include "ctcal/sensors/parallel_for.h"
 #include "ctcal/spline/se3_spline.h"
 #include "ctcal/spline/so3.h"
 #include "ctcal/spline/so3_manifold.h"
 #include "ctcal/targets/board.h"
-#include "parallel_for.h"
 #include "spline_trajectory_fit.h"
 
 namespace ctcal {

@@ -5,7 +5,7 @@
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
-#include <png.h>
+#include <libdeflate.h>
 
 #include <Eigen/Geometry>
 
@@ -17,6 +17,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace ctcal::report {
@@ -248,10 +249,17 @@ class DotRaster {
     reach_ = static_cast<int>(std::ceil(r + 0.5));
     const int side = 2 * reach_ + 1;
     mask_.resize(static_cast<size_t>(side) * side);
+    span_.assign(static_cast<size_t>(side), {0, -1});
     for (int dy = -reach_; dy <= reach_; ++dy) {
+      auto& [first, last] = span_[static_cast<size_t>(dy + reach_)];
       for (int dx = -reach_; dx <= reach_; ++dx) {
-        mask_[static_cast<size_t>(dy + reach_) * side + (dx + reach_)] = static_cast<std::uint8_t>(
+        const auto m = static_cast<std::uint8_t>(
             255.0 * std::clamp(r + 0.5 - std::hypot(dx, dy), 0.0, 1.0) + 0.5);
+        mask_[static_cast<size_t>(dy + reach_) * side + (dx + reach_)] = m;
+        if (m != 0) {
+          first = std::min(first, dx);
+          last = dx;
+        }
       }
     }
   }
@@ -269,16 +277,23 @@ class DotRaster {
       return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
     };
     const std::uint32_t alpha = channel(c.a), r = channel(c.r), g = channel(c.g), b = channel(c.b);
+    const std::uint32_t opaque = 0xff000000u | (r << 16) | (g << 8) | b;
     for (int dy = -reach_; dy <= reach_; ++dy) {
       const int py = cy + dy;
       if (py < 0 || py >= h_)
         continue;
       auto* row = reinterpret_cast<std::uint32_t*>(data_ + static_cast<size_t>(py) * stride_);
       const std::uint8_t* m = &mask_[static_cast<size_t>(dy + reach_) * side];
-      for (int dx = -reach_; dx <= reach_; ++dx) {
+      // Only the disc's own pixels of this row (the mask is 0 outside [first, last]).
+      const auto [first, last] = span_[static_cast<size_t>(dy + reach_)];
+      for (int dx = std::max(first, -cx); dx <= std::min(last, w_ - 1 - cx); ++dx) {
         const int px = cx + dx;
         const std::uint32_t a = (alpha * m[dx + reach_] + 127) / 255;
-        if (px < 0 || px >= w_ || a == 0)
+        if (a == 255) {  // "over" with full coverage is the source itself
+          row[px] = opaque;
+          continue;
+        }
+        if (a == 0)
           continue;
         // Premultiplied ARGB32 "over": out = src a + (1 - a) dst, per 8-bit channel.
         const std::uint32_t d = row[px];
@@ -308,17 +323,57 @@ class DotRaster {
   unsigned char* data_ = nullptr;
   int stride_ = 0;
   int reach_ = 0;
-  std::vector<std::uint8_t> mask_;  // disc coverage, 0..255
+  std::vector<std::uint8_t> mask_;         // disc coverage, 0..255
+  std::vector<std::pair<int, int>> span_;  // per mask row, the dx range of non-zero coverage
 };
 
-// A line of many more points than half-points across (XYPlot::Draw): per half-point column one
-// bar from the lowest to the highest point, reaching back to the previous column's last point
-// so that the line stays connected; `width` thick like the stroke. NaN breaks the line.
+// A line of many more points than half-points across (XYPlot::Draw), drawn as the band it
+// covers: per half-point column the lowest and the highest point, reaching back to the previous
+// column's last point so that the line stays connected, `width` thick like the stroke. The band's
+// upper edge runs through the columns' centres at the highest point of the column and its two
+// neighbours (a one-column spike keeps a flat top as wide as a stroke's cap instead of thinning to
+// a needle), its lower edge back likewise: one polygon per run, two points per column on a PDF
+// page instead of a rectangle. NaN breaks the line.
 template <typename AxesT>
 void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
                    const std::vector<double>& y, double width) {
   const size_t n = std::min(x.size(), y.size());
   const double half = 0.5 * width;
+  struct Column {
+    double index, top, bottom;
+  };
+  std::vector<Column> run;
+  std::vector<double> upper, lower;  // the band's edges per column
+  const auto fill_run = [&]() {
+    if (run.empty())
+      return;
+    const size_t m = run.size();
+    upper.resize(m);
+    lower.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+      upper[i] = run[i].top;
+      lower[i] = run[i].bottom;
+      for (const size_t j : {i - 1, i + 1}) {  // i - 1 wraps to a huge index at i = 0
+        if (j < m && std::abs(run[j].index - run[i].index) == 1.0) {
+          upper[i] = std::min(upper[i], run[j].top);
+          lower[i] = std::max(lower[i], run[j].bottom);
+        }
+      }
+    }
+    const auto centre = [&](size_t i) { return 0.5 * run[i].index + 0.25; };
+    // The ends reach out like the stroke's (to the outer columns' bars' edges).
+    const double x0 = centre(0) - 0.25 - 0.5 * half, x1 = centre(m - 1) + 0.25 + 0.5 * half;
+    cairo_move_to(cr, x0, upper[0]);
+    for (size_t i = 0; i < m; ++i)
+      cairo_line_to(cr, centre(i), upper[i]);
+    cairo_line_to(cr, x1, upper[m - 1]);
+    cairo_line_to(cr, x1, lower[m - 1]);
+    for (size_t i = m; i-- > 0;)
+      cairo_line_to(cr, centre(i), lower[i]);
+    cairo_line_to(cr, x0, lower[0]);
+    cairo_close_path(cr);
+    run.clear();
+  };
   bool open = false, have_prev = false;
   double column = 0.0, lo = 0.0, hi = 0.0, last = 0.0, prev_last = 0.0;
   const auto flush = [&]() {
@@ -329,7 +384,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
       top = std::min(top, prev_last);
       bottom = std::max(bottom, prev_last);
     }
-    cairo_rectangle(cr, 0.5 * column - half * 0.5, top - half, 0.5 + half, bottom - top + width);
+    run.push_back({column, top - half, bottom + half});
     prev_last = last;
     have_prev = true;
     open = false;
@@ -337,6 +392,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
   for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
       flush();
+      fill_run();
       have_prev = false;
       continue;
     }
@@ -355,6 +411,7 @@ void DrawDenseLine(cairo_t* cr, const AxesT& ax, const std::vector<double>& x,
     last = dy;
   }
   flush();
+  fill_run();
   cairo_fill(cr);
 }
 
@@ -602,10 +659,10 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
             cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           pen = true;
         };
-        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as one filled bar
-        // per half-point column from its lowest to its highest point, joined to the previous
-        // column's last point: the picture of the stroke (spikes kept) without stroking
-        // thousands of overlapping zigzag segments, which cost cairo ~1 s per PNG.
+        // A dense line (a 60 s IMU stream: 12000 points on ~700 pt) is drawn as the filled band
+        // of its half-point columns' lowest and highest points, joined to the previous column's
+        // last point: the picture of the stroke (spikes kept) without stroking thousands of
+        // overlapping zigzag segments, which cost cairo ~1 s per PNG.
         const bool thin = s.kind == Series::Kind::kLine && static_cast<double>(n) > 4 * p.w;
         if (thin) {
           DrawDenseLine(cr, ax, s.x, s.y, s.width);
@@ -624,7 +681,7 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
       case Series::Kind::kScatter: {
         // Up to kVectorDots dots are vector circles. Beyond, cairo's per-dot fill (a minute's
         // recording has 170k corners per camera: 3.5 s per drawing) is replaced by stamping an
-        // anti-aliased disc into an image (the PNG's pixels, 2.5 px per pt on a PDF page), later
+        // anti-aliased disc into an image (the PNG's pixels, 2 px per pt on a PDF page), later
         // dots over earlier ones as the vector path would draw them (same look, ~50 ms, a fixed
         // size in the PDF).
         constexpr size_t kVectorDots = 3000;
@@ -636,8 +693,10 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
           return c;
         };
         if (n > kVectorDots) {
-          // Image targets: their own resolution; vector pages: 2.5 px per pt (180 dpi).
-          double scale = 2.5;
+          // Image targets: their own resolution; vector pages: 2 px per pt (144 dpi: dots of
+          // radius >= 1.2 pt stay round; 64 % of the pixels of 2.5 px per pt, which cairo
+          // deflates at zlib's level 6 and the stamping fills).
+          double scale = 2.0;
           if (cairo_surface_get_type(cairo_get_target(cr)) == CAIRO_SURFACE_TYPE_IMAGE) {
             double ux = 1.0, uy = 0.0;
             cairo_user_to_device_distance(cr, &ux, &uy);
@@ -665,16 +724,31 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
         c.a = 0.18;
         SetColor(cr, c);
         const size_t m = std::min(n, s.y2.size());
+        // A band of many more points than half-points across (a 60 s envelope: 18000) keeps one
+        // point per half-point column and each edge's last: its edges are smooth curves or
+        // constants, and the PDF page would otherwise hold every sample twice.
+        const bool dense = static_cast<double>(m) > 4 * p.w;
+        double column = kNaN;
+        const auto skip = [&](size_t i, bool last) {
+          if (!dense || last)
+            return false;
+          const double here = std::floor(2.0 * ax.X(s.x[i]));
+          if (here == column)
+            return true;
+          column = here;
+          return false;
+        };
         bool any = false;
         for (size_t i = 0; i < m; ++i) {
-          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
+          if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || skip(i, i + 1 == m))
             continue;
           any ? cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]))
               : cairo_move_to(cr, ax.X(s.x[i]), ax.Y(s.y[i]));
           any = true;
         }
+        column = kNaN;
         for (size_t i = m; i-- > 0;) {
-          if (std::isfinite(s.x[i]) && std::isfinite(s.y2[i]))
+          if (std::isfinite(s.x[i]) && std::isfinite(s.y2[i]) && !skip(i, i == 0))
             cairo_line_to(cr, ax.X(s.x[i]), ax.Y(s.y2[i]));
         }
         if (any)
@@ -1100,13 +1174,34 @@ void MatrixPlot::Draw(void* cairo, const Rect& area) const {
     return;
   }
   const double cell = side / n;
-  for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) {
-      SetColor(cr, Diverging(values(r, c)));
-      cairo_rectangle(cr, p.x + c * cell, p.y + r * cell, cell + 0.3, cell + 0.3);
-      cairo_fill(cr);
+  // One image pixel per cell, scaled up without smoothing: the ~100 parameters of a rig are
+  // 10 000 cells, which as filled rectangles were 0.6 MB of a PDF page.
+  cairo_surface_t* cells = cairo_image_surface_create(CAIRO_FORMAT_RGB24, n, n);
+  cairo_surface_flush(cells);
+  unsigned char* pixels = cairo_image_surface_get_data(cells);
+  const int stride = cairo_image_surface_get_stride(cells);
+  if (pixels != nullptr) {
+    const auto channel = [](double v) {
+      return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+    };
+    for (int r = 0; r < n; ++r) {
+      auto* row = reinterpret_cast<std::uint32_t*>(pixels + static_cast<size_t>(r) * stride);
+      for (int c = 0; c < n; ++c) {
+        const Color k = Diverging(values(r, c));
+        row[c] = (channel(k.r) << 16) | (channel(k.g) << 8) | channel(k.b);
+      }
     }
   }
+  cairo_surface_mark_dirty(cells);
+  cairo_save(cr);
+  cairo_translate(cr, p.x, p.y);
+  cairo_scale(cr, cell, cell);
+  cairo_set_source_surface(cr, cells, 0.0, 0.0);
+  cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
+  cairo_rectangle(cr, 0.0, 0.0, n, n);
+  cairo_fill(cr);
+  cairo_restore(cr);
+  cairo_surface_destroy(cells);
   cairo_set_source_rgb(cr, 0.25, 0.25, 0.25);
   cairo_set_line_width(cr, 0.8);
   cairo_rectangle(cr, p.x, p.y, p.w, p.h);
@@ -1290,54 +1385,61 @@ cairo_surface_t* DrawImage(const Figure& figure, double scale) {
 
 namespace {
 
-void PngAppend(png_structp png, png_bytep data, png_size_t length) {
-  static_cast<std::string*>(png_get_io_ptr(png))
-      ->append(reinterpret_cast<const char*>(data), length);
+void AppendBigEndian(std::string* out, std::uint32_t v) {
+  for (const int shift : {24, 16, 8, 0})
+    out->push_back(static_cast<char>((v >> shift) & 0xffu));
 }
 
-[[noreturn]] void PngFail(png_structp png, png_const_charp message) {
-  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
-  png_longjmp(png, 1);
+// One PNG chunk: length, type, data, CRC-32 of type and data.
+void AppendChunk(std::string* out, const char* type, const char* data, std::size_t size) {
+  AppendBigEndian(out, static_cast<std::uint32_t>(size));
+  const std::size_t at = out->size();
+  out->append(type, 4);
+  out->append(data, size);
+  AppendBigEndian(out, libdeflate_crc32(0, out->data() + at, size + 4));
 }
 
-// 8-bit RGB PNG of an RGB24 surface. cairo's own writer uses zlib's default level 6, ~40 % of
-// the report's rendering time; level 2 with the "up" filter costs a quarter of that for files
-// ~15 % larger (plots are mostly flat colour).
+// 8-bit RGB PNG of an RGB24 surface, every row "up"-filtered (plots are mostly flat colour), the
+// image data one zlib stream by libdeflate at level 2: the size of zlib's level 2 (cairo's own
+// writer uses level 6, ~40 % of the report's rendering time) at a third of its time.
 std::string EncodePng(cairo_surface_t* surface) {
   const int w = cairo_image_surface_get_width(surface);
   const int h = cairo_image_surface_get_height(surface);
   const int stride = cairo_image_surface_get_stride(surface);
   const unsigned char* data = cairo_image_surface_get_data(surface);
-  std::string bytes, error;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngFail, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (png == nullptr || info == nullptr) {
-    png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("PNG encoding failed: out of memory");
-  }
-  std::vector<png_byte> row(static_cast<size_t>(w) * 3);
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("PNG encoding failed: " + error);
-  }
-  png_set_write_fn(png, &bytes, PngAppend, nullptr);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), 8,
-               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  png_set_compression_level(png, 2);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
-  png_write_info(png, info);
+  const std::size_t row_bytes = 1 + 3 * static_cast<std::size_t>(w);
+  std::vector<unsigned char> filtered(row_bytes * static_cast<std::size_t>(h));
+  std::vector<unsigned char> rgb(3 * static_cast<std::size_t>(w)), above(rgb.size(), 0);
   for (int y = 0; y < h; ++y) {
     const auto* px = reinterpret_cast<const std::uint32_t*>(data + static_cast<size_t>(y) * stride);
     for (int x = 0; x < w; ++x) {
-      row[3 * x] = static_cast<png_byte>((px[x] >> 16) & 0xffu);
-      row[3 * x + 1] = static_cast<png_byte>((px[x] >> 8) & 0xffu);
-      row[3 * x + 2] = static_cast<png_byte>(px[x] & 0xffu);
+      rgb[3 * x] = static_cast<unsigned char>((px[x] >> 16) & 0xffu);
+      rgb[3 * x + 1] = static_cast<unsigned char>((px[x] >> 8) & 0xffu);
+      rgb[3 * x + 2] = static_cast<unsigned char>(px[x] & 0xffu);
     }
-    png_write_row(png, row.data());
+    unsigned char* row = &filtered[static_cast<std::size_t>(y) * row_bytes];
+    row[0] = 2;  // "up": each byte minus the byte above it
+    for (std::size_t i = 0; i < rgb.size(); ++i)
+      row[1 + i] = static_cast<unsigned char>(rgb[i] - above[i]);
+    std::swap(rgb, above);
   }
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
+  libdeflate_compressor* compressor = libdeflate_alloc_compressor(2);
+  if (compressor == nullptr)
+    throw std::runtime_error("PNG encoding failed: out of memory");
+  std::string idat(libdeflate_zlib_compress_bound(compressor, filtered.size()), '\0');
+  const std::size_t packed = libdeflate_zlib_compress(compressor, filtered.data(), filtered.size(),
+                                                      idat.data(), idat.size());
+  libdeflate_free_compressor(compressor);
+  if (packed == 0)
+    throw std::runtime_error("PNG encoding failed: compression");
+  std::string bytes("\x89PNG\r\n\x1a\n", 8);
+  std::string header;
+  AppendBigEndian(&header, static_cast<std::uint32_t>(w));
+  AppendBigEndian(&header, static_cast<std::uint32_t>(h));
+  header += std::string("\x08\x02\x00\x00\x00", 5);  // 8 bits, RGB, deflate, filters, no interlace
+  AppendChunk(&bytes, "IHDR", header.data(), header.size());
+  AppendChunk(&bytes, "IDAT", idat.data(), packed);
+  AppendChunk(&bytes, "IEND", nullptr, 0);
   return bytes;
 }
 

@@ -21,6 +21,7 @@
 
 #include "ctcal/report/distortion_field.h"
 #include "ctcal/report/plot.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -1223,23 +1224,25 @@ std::vector<Check> EvaluateChecks(const RigConfig& result, const ReportData& dat
   return out;
 }
 
-ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& options) {
+namespace {
+
+RigConfig LoadResult(const std::string& out_dir) {
   const std::string result_path = (fs::path(out_dir) / "result.yaml").string();
   if (!fs::exists(result_path))
     throw std::runtime_error(result_path + ": not found (is " + out_dir +
                              " a folder written by ctcal calibrate?)");
   std::vector<std::string> warnings;
-  const RigConfig rig = LoadRig(result_path, &warnings);
-  std::vector<std::string> names;
-  for (const auto& s : rig.sensors)
-    names.push_back(s.name);
-  const ReportData data = LoadReportData(out_dir, names);
+  return LoadRig(result_path, &warnings);
+}
 
+ReportOutput Render(const std::string& out_dir, const RigConfig& rig, const ReportData& data,
+                    const ReportOptions& options, StageClock* clock) {
   ReportOutput out;
   out.checks = EvaluateChecks(rig, data, options.thresholds);
   Builder builder(rig, data, options, out_dir);
   const std::vector<Section> sections =
       builder.Build(out.checks, (fs::path(out_dir) / "crosscheck.yaml").string());
+  out.stages.push_back(clock->Lap("checks and figures' data"));
 
   if (!options.png_dir.empty())
     fs::create_directories(options.png_dir);
@@ -1251,6 +1254,7 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     bool html_image = false;
     bool png = false;
     std::string bytes;
+    double pdf_cpu_s = 0.0, png_cpu_s = 0.0;
   };
   std::vector<Job> jobs;
   for (const Section& s : sections) {
@@ -1278,32 +1282,39 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       if (!jobs[i].png)
         continue;
+      const double cpu0 = ThreadCpuSeconds();
       try {
         jobs[i].bytes = RenderPng(*jobs[i].figure, kPngScale);
       } catch (const std::exception& e) {
         errors[i] = jobs[i].figure->id + ": " + e.what();
       }
+      jobs[i].png_cpu_s = ThreadCpuSeconds() - cpu0;
     }
   };
+  // `threads` in all: the PDF writer (which then joins the PNG workers) and threads - 1 workers.
   const unsigned threads = std::clamp(options.threads > 0 ? static_cast<unsigned>(options.threads)
                                                           : std::thread::hardware_concurrency(),
-                                      1u, 8u);
+                                      2u, 8u);
   std::vector<std::thread> pool;
-  for (unsigned t = 0; t < threads; ++t)
+  for (unsigned t = 1; t < threads; ++t)
     pool.emplace_back(worker);
   std::string pdf_error;
   if (options.pdf) {
     out.pdf_path = (fs::path(out_dir) / "report.pdf").string();
     try {
       PdfDocument pdf(out.pdf_path);
-      for (const Job& j : jobs)
+      for (Job& j : jobs) {
+        const double cpu0 = ThreadCpuSeconds();
         pdf.AddPage(*j.figure);
+        j.pdf_cpu_s = ThreadCpuSeconds() - cpu0;
+      }
       out.pdf_pages = pdf.pages();
       pdf.Close();
     } catch (const std::exception& e) {
       pdf_error = e.what();
     }
   }
+  worker();
   for (std::thread& t : pool)
     t.join();
   if (!pdf_error.empty())
@@ -1312,6 +1323,9 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     if (!e.empty())
       throw std::runtime_error(e);
   }
+  out.stages.push_back(clock->Lap("figures"));
+  for (const Job& j : jobs)
+    out.figure_times.push_back({j.figure->id, j.pdf_cpu_s, j.png_cpu_s});
 
   std::ostringstream html;
   if (options.html) {
@@ -1362,6 +1376,32 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
     if (!f)
       throw std::runtime_error(out.html_path + ": cannot write");
   }
+  out.stages.push_back(clock->Lap("html"));
+  return out;
+}
+
+}  // namespace
+
+ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& options) {
+  StageClock clock;
+  const RigConfig rig = LoadResult(out_dir);
+  std::vector<std::string> names;
+  for (const auto& s : rig.sensors)
+    names.push_back(s.name);
+  const ReportData data = LoadReportData(out_dir, names);
+  const StageTime read = clock.Lap("read");
+  ReportOutput out = Render(out_dir, rig, data, options, &clock);
+  out.stages.insert(out.stages.begin(), read);
+  return out;
+}
+
+ReportOutput RenderReport(const std::string& out_dir, const ReportData& data,
+                          const ReportOptions& options) {
+  StageClock clock;
+  const RigConfig rig = LoadResult(out_dir);
+  const StageTime read = clock.Lap("read");
+  ReportOutput out = Render(out_dir, rig, data, options, &clock);
+  out.stages.insert(out.stages.begin(), read);
   return out;
 }
 

@@ -4,12 +4,15 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
+#include <thread>
 
 #include "ctcal/sensors/number_format.h"
+#include "ctcal/sensors/parallel_for.h"
 
 namespace ctcal {
 namespace {
@@ -553,48 +556,76 @@ void WriteBiasesCsv(const std::string& path, const std::vector<BiasSample>& bias
   Finish(f, path);
 }
 
+namespace {
+
+// One sensor's files (LoadDataset).
+SensorData LoadSensor(const std::string& data_dir, const RigConfig& rig, const SensorConfig& s,
+                      const InertialRange& range, Warnings* warnings) {
+  const fs::path dir = fs::path(data_dir) / s.name;
+  if (!fs::is_directory(dir)) {
+    throw std::runtime_error(dir.string() + ": no such folder (sensor '" + s.name +
+                             "' of the rig has no data)");
+  }
+  SensorData d;
+  const std::string data_csv = (dir / "data.csv").string();
+  switch (s.type) {
+    case SensorType::kImu:
+      d.imu = ReadImuCsv(data_csv, warnings, &range);
+      break;
+    case SensorType::kGyro:
+      d.gyro = ReadGyroCsv(data_csv, warnings, &range);
+      break;
+    case SensorType::kCamera: {
+      const std::string corners_csv = (dir / "corners.csv").string();
+      d.has_corners = fs::is_regular_file(corners_csv);
+      const bool has_list = fs::is_regular_file(data_csv);
+      if (!d.has_corners && !has_list) {
+        throw std::runtime_error(dir.string() + ": camera '" + s.name +
+                                 "' has neither corners.csv nor data.csv");
+      }
+      if (has_list)
+        d.images = ReadImageCsv(data_csv, !d.has_corners, warnings);
+      if (d.has_corners) {
+        std::set<std::int64_t> stamps;
+        for (const ImageEntry& e : d.images)
+          stamps.insert(e.t_ns);
+        const CornerImage image{s.width, s.height, s.pixel_sigma};
+        d.corners = ReadCornersCsv(corners_csv, TargetCornerCount(rig.target),
+                                   has_list ? &stamps : nullptr, &image);
+      }
+      break;
+    }
+  }
+  return d;
+}
+
+}  // namespace
+
 std::map<std::string, SensorData> LoadDataset(const std::string& data_dir, const RigConfig& rig,
                                               Warnings* warnings) {
   if (!fs::is_directory(data_dir))
     throw std::runtime_error(data_dir + ": no such dataset folder");
-  std::map<std::string, SensorData> out;
+  // The sensors' files on the hardware's threads, each into its own slot; the warnings and the
+  // first error in the rig's order, as a serial read gives them.
   const InertialRange range;
-  for (const SensorConfig& s : rig.sensors) {
-    const fs::path dir = fs::path(data_dir) / s.name;
-    if (!fs::is_directory(dir)) {
-      throw std::runtime_error(dir.string() + ": no such folder (sensor '" + s.name +
-                               "' of the rig has no data)");
+  const size_t n = rig.sensors.size();
+  std::vector<SensorData> loaded(n);
+  std::vector<Warnings> sensor_warnings(n);
+  std::vector<std::exception_ptr> errors(n);
+  ParallelFor(static_cast<int>(std::thread::hardware_concurrency()), n, [&](size_t i) {
+    try {
+      loaded[i] = LoadSensor(data_dir, rig, rig.sensors[i], range, &sensor_warnings[i]);
+    } catch (...) {
+      errors[i] = std::current_exception();
     }
-    SensorData& d = out[s.name];
-    const std::string data_csv = (dir / "data.csv").string();
-    switch (s.type) {
-      case SensorType::kImu:
-        d.imu = ReadImuCsv(data_csv, warnings, &range);
-        break;
-      case SensorType::kGyro:
-        d.gyro = ReadGyroCsv(data_csv, warnings, &range);
-        break;
-      case SensorType::kCamera: {
-        const std::string corners_csv = (dir / "corners.csv").string();
-        d.has_corners = fs::is_regular_file(corners_csv);
-        const bool has_list = fs::is_regular_file(data_csv);
-        if (!d.has_corners && !has_list) {
-          throw std::runtime_error(dir.string() + ": camera '" + s.name +
-                                   "' has neither corners.csv nor data.csv");
-        }
-        if (has_list)
-          d.images = ReadImageCsv(data_csv, !d.has_corners, warnings);
-        if (d.has_corners) {
-          std::set<std::int64_t> stamps;
-          for (const ImageEntry& e : d.images)
-            stamps.insert(e.t_ns);
-          const CornerImage image{s.width, s.height, s.pixel_sigma};
-          d.corners = ReadCornersCsv(corners_csv, TargetCornerCount(rig.target),
-                                     has_list ? &stamps : nullptr, &image);
-        }
-        break;
-      }
-    }
+  });
+  std::map<std::string, SensorData> out;
+  for (size_t i = 0; i < n; ++i) {
+    for (const std::string& w : sensor_warnings[i])
+      Warn(warnings, w);
+    if (errors[i])
+      std::rethrow_exception(errors[i]);
+    out[rig.sensors[i].name] = std::move(loaded[i]);
   }
   return out;
 }

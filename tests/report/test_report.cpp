@@ -7,11 +7,15 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "ctcal/report/report.h"
 #include "ctcal/report/report_data.h"
@@ -142,6 +146,48 @@ TEST_F(ReportTest, MalformedDataNamesFileAndLine) {
   }
   std::ofstream(CorrelationPath(dir_)) << "#name,a,b\na,1,0\nc,0,1\n";
   EXPECT_THROW(ReadCorrelation(CorrelationPath(dir_)), std::runtime_error);
+}
+
+// The readers (one pass over the text, cells as views, from_chars) take what they took before
+// (CRLF line ends, '+' and blanks before an integer as std::stoll took them, YAML's .nan and .inf)
+// and name the file and line of anything else with the same messages.
+TEST_F(ReportTest, ReadersKeepTheirInputsAndTheirMessages) {
+  fs::create_directories(ReportDataDir(dir_));
+  const std::string path = GyroPath(dir_, "imu0");
+  std::ofstream(path) << "#t_ns,meas_x,meas_y,meas_z,pred_x,pred_y,pred_z\r\n"
+                      << "+5,1,.nan,-.inf,1e-3,-0.0,2\r\n"
+                      << " 6,1,2,3,4,5,6\n\n";
+  const std::vector<InertialSample> rows = ReadInertialSamples(path);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].t_ns, 5);
+  EXPECT_TRUE(std::isnan(rows[0].meas.y()));
+  EXPECT_EQ(rows[0].meas.z(), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(rows[0].pred.x(), 1e-3);
+  EXPECT_EQ(rows[1].t_ns, 6);
+  const auto message = [&](const std::string& text) {
+    std::ofstream(path) << "#t_ns,meas_x,meas_y,meas_z,pred_x,pred_y,pred_z\n"
+                        << "1,1,2,3,4,5,6\n"
+                        << text;
+    try {
+      ReadInertialSamples(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("1.5,1,2,3,4,5,6\n"), path + ":3: '1.5' is not an integer");
+  EXPECT_EQ(message("2,1,2,3,4,5\n"), path + ":3: expected 7 columns, got 6");
+  EXPECT_EQ(message("2,1,2,3,4,5,6,\n"), path + ":3: expected 7 columns, got 8");
+  EXPECT_EQ(message("2,1,2,3,4,5,1e999x\n"), path + ":3: '1e999x' is not a number");
+  EXPECT_EQ(message("2,1,2,3,4,,6\n"), path + ":3: '' is not a number");
+  const std::string corners = CornersPath(dir_, "cam0");
+  std::ofstream(corners) << "1,0,0,1,2,3,4,5,2\n";
+  try {
+    ReadCornerResiduals(corners);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), corners + ":1: outlier must be 0 or 1, got 2");
+  }
 }
 
 TEST(ReportChecks, CoverageCountsInlierCells) {
@@ -396,6 +442,92 @@ TEST_F(ReportTest, PngDirOfABothFolderKeepsEachMethodsFigures) {
   for (const auto& e : fs::directory_iterator(png))
     EXPECT_TRUE(e.is_directory()) << e.path() << " at the top of --png-dir";
   EXPECT_NE(Slurp(png + "/spline/fig-trajectory.png"), Slurp(png + "/discrete/fig-trajectory.png"));
+}
+
+// WriteReportData returns the data as the files hold them: what LoadReportData reads back, to the
+// bit; the rounded columns hold printf's digits ("%.3f" for u, v, "%.7g" for the errors and the
+// bias rows), the others the exact values; a table longer than one gzip member (4 MiB of text)
+// reads back whole.
+TEST_F(ReportTest, WrittenDataAreWhatTheFilesHoldToTheBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> pixel(-50.0, 800.0), err(-3.0, 3.0);
+  const auto printf_value = [](const char* format, double x) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, format, x);
+    return std::strtod(buf, nullptr);
+  };
+  ReportData d;
+  std::vector<CornerResidual>& corners = d.corners["cam0"];
+  for (int i = 0; i < 80000; ++i) {  // ~5.6 MB of text: two gzip members
+    CornerResidual c;
+    c.t_ns = 1'000'000'000LL + 33'333'333LL * (i / 40);
+    c.frame = i / 40;
+    c.corner_id = i % 40;
+    c.u = pixel(rng);
+    c.v = i % 1000 == 0 ? 0.0005 : pixel(rng);  // a tie for "%.3f"
+    c.du = err(rng) * std::pow(10.0, -(i % 9));
+    c.dv = i == 7 ? std::numeric_limits<double>::quiet_NaN() : -0.0;
+    c.whitened = std::hypot(c.du, c.v);
+    c.outlier = i % 13 == 0;
+    corners.push_back(c);
+  }
+  BiasSample b{5, Eigen::Vector3d(1.23456789e-3, -2.5e-7, 1.0 / 3.0), Eigen::Vector3d(1, 2, 3)};
+  d.bias["imu0"].gyro.push_back(b);
+  d.gyro["imu0"].push_back({5, Eigen::Vector3d(0.1, 1.0 / 7.0, -3e-300), Eigen::Vector3d(1, 2, 3)});
+  d.trajectory.push_back({5, Eigen::Vector3d(0.1, 0.2, 1.0 / 3.0), Eigen::Quaterniond(1, 0, 0, 0)});
+  d.run_info = {{"command", "ctcal calibrate --out a,b"}};
+
+  const ReportData stored = WriteReportData(dir_, d, 2);
+  const ReportData read = LoadReportData(dir_, {"cam0", "imu0"}, 2);
+  const auto same = [](double x, double y) {
+    return std::memcmp(&x, &y, sizeof x) == 0 || (std::isnan(x) && std::isnan(y));
+  };
+  ASSERT_EQ(read.corners.at("cam0").size(), corners.size());
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const CornerResidual &s = stored.corners.at("cam0")[i], &r = read.corners.at("cam0")[i],
+                         &c = corners[i];
+    ASSERT_EQ(r.t_ns, c.t_ns);
+    ASSERT_EQ(r.frame, c.frame);
+    ASSERT_EQ(r.corner_id, c.corner_id);
+    ASSERT_EQ(r.outlier, c.outlier);
+    for (const auto& [sv, rv, want] :
+         {std::tuple{s.u, r.u, printf_value("%.3f", c.u)},
+          std::tuple{s.v, r.v, printf_value("%.3f", c.v)},
+          std::tuple{s.du, r.du, printf_value("%.7g", c.du)},
+          std::tuple{s.dv, r.dv, std::isnan(c.dv) ? c.dv : printf_value("%.7g", c.dv)},
+          std::tuple{s.whitened, r.whitened, printf_value("%.7g", c.whitened)}}) {
+      ASSERT_TRUE(same(sv, rv)) << "row " << i << ": " << sv << " written, " << rv << " read";
+      ASSERT_TRUE(same(rv, want)) << "row " << i << ": " << rv << " read, printf gives " << want;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(same(read.bias.at("imu0").gyro[0].b[k], printf_value("%.7g", b.b[k])));
+    EXPECT_TRUE(same(stored.bias.at("imu0").gyro[0].b[k], read.bias.at("imu0").gyro[0].b[k]));
+    EXPECT_TRUE(same(read.gyro.at("imu0")[0].meas[k], d.gyro.at("imu0")[0].meas[k]));
+    EXPECT_TRUE(same(read.trajectory[0].p_W_B[k], d.trajectory[0].p_W_B[k]));
+  }
+  EXPECT_EQ(read.run_info, d.run_info);
+}
+
+// `ctcal calibrate` renders the report from the data it has just written, `ctcal report` from the
+// folder: the same HTML, byte for byte.
+TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
+  test::MakeSyntheticOut(dir_);
+  std::vector<std::string> ignored;
+  std::vector<std::string> names;
+  for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
+    names.push_back(s.name);
+  ReportData data = LoadReportData(dir_, names);
+  for (CornerResidual& c : data.corners.at("cam0"))  // unrounded again: WriteReportData rounds
+    c.du += 1e-9;
+  const ReportData stored = WriteReportData(dir_, data, 2);
+  ReportOptions opt;
+  opt.ctcal_version = "test";
+  opt.pdf = false;
+  RenderReport(dir_, stored, opt);
+  const std::string from_memory = Slurp(dir_ + "/report.html");
+  RenderReport(dir_, opt);
+  EXPECT_EQ(from_memory, Slurp(dir_ + "/report.html"));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ctcal/report/report_data.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/rig.h"
 
 namespace ctcal::report {
@@ -54,8 +55,15 @@ struct ReportOptions {
   bool html = true;
   bool pdf = true;
   std::string png_dir;  // when set, every figure is also written there as <id>.png (docs)
-  int threads = 0;      // PNG workers beside the PDF writer; 0: the hardware's threads (max 8)
+  int threads =
+      0;  // the PDF writer and threads - 1 PNG workers (at least 1); 0: the hardware's (max 8)
   CheckThresholds thresholds;
+};
+
+// CPU seconds of one figure: its PDF page (on the PDF writer's thread) and its PNG (a worker's).
+struct FigureTime {
+  std::string id;
+  double pdf_cpu_s = 0.0, png_cpu_s = 0.0;
 };
 
 struct ReportOutput {
@@ -65,10 +73,18 @@ struct ReportOutput {
   std::vector<std::string> figure_ids;
   std::vector<std::string> omitted;  // "sec-crosscheck: no OUT/crosscheck.yaml", ...
   std::vector<Check> checks;
+  // Where the time went: read, checks and figures' data, figures (PDF and PNGs), html.
+  std::vector<StageTime> stages;
+  std::vector<FigureTime> figure_times;
 };
 
 // Reads OUT and writes the report. Throws std::runtime_error naming the file for unreadable
 // input (result.yaml missing or invalid, a malformed report_data file) or an unwritable output.
 ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& options = {});
+// The same from the report data in memory, as LoadReportData would read them from OUT (`ctcal
+// calibrate` renders what it has just written, WriteReportData's return, without reading it
+// back); OUT still supplies result.yaml and crosscheck.yaml.
+ReportOutput RenderReport(const std::string& out_dir, const ReportData& data,
+                          const ReportOptions& options = {});
 
 }  // namespace ctcal::report

@@ -12,8 +12,9 @@
 //   OUT/report_data/correlation.csv            name,<name_1>,...,<name_n>; then one row per name
 //   OUT/report_data/run_info.csv               key,value (configuration and versions, in order)
 //
-// The per-sample tables are gzip-compressed CSV (`zcat` reads them; a minute's demo: 8 MB instead
-// of 49 MB); readers also accept the plain `.csv` of folders written before.
+// The per-sample tables are gzip-compressed CSV (`zcat` reads them; written as gzip members of
+// 4 MiB of text each, which zcat, zlib and Python read as one file); readers also accept the
+// plain `.csv` of folders written before.
 //
 // Conventions: t_ns on the base clock (SPEC section 2) in integer nanoseconds; corner residuals
 // du, dv = measured - predicted in px, `whitened` = |(du, dv)| / sigma_px (the norm of the
@@ -126,11 +127,16 @@ struct ReportData {
   RunInfo run_info;
 };
 
-// Reads the files of every sensor name given (the rig's sensors).
-ReportData LoadReportData(const std::string& out_dir, const std::vector<std::string>& sensors);
+// Reads the files of every sensor name given (the rig's sensors), one file per job on `threads`
+// threads (<= 0: the hardware's).
+ReportData LoadReportData(const std::string& out_dir, const std::vector<std::string>& sensors,
+                          int threads = 0);
 
 // Writes every file of `data` (the inverse of LoadReportData; empty tables write no file, except
-// run_info.csv, which is always written).
-void WriteReportData(const std::string& out_dir, const ReportData& data);
+// run_info.csv, which is always written), one file per job on `threads` threads (<= 0: the
+// hardware's). Returns `data` as the files hold it, the corner and bias columns rounded to their
+// written digits: what LoadReportData reads back, to the bit, so that a report rendered from the
+// return equals one rendered from the folder.
+ReportData WriteReportData(const std::string& out_dir, ReportData data, int threads = 0);
 
 }  // namespace ctcal::report

@@ -5,14 +5,19 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 namespace ctcal {
 
 std::string FormatDouble(double x);
+// FormatDouble written into [first, last), which holds at least kFormatDoubleChars; returns the
+// end of what was written (the writers of large tables format without a string per number).
+inline constexpr int kFormatDoubleChars = 32;
+char* FormatDoubleTo(char* first, char* last, double x);
 
 // Parses a whole string as a double: decimal or scientific notation, YAML's .inf / -.inf / .nan
 // (any case), and inf / nan. Returns false (leaving *x untouched) for anything else, including
 // trailing characters and an empty string.
-bool ParseDouble(const std::string& s, double* x);
+bool ParseDouble(std::string_view s, double* x);
 
 }  // namespace ctcal
