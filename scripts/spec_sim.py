@@ -13,15 +13,23 @@ DATA/groundtruth/data.csv, DATA/truth.yaml and DATA/rig.yaml (a coarse, hand-mad
 lengths 3-5 % off, no distortion, rotations a few degrees off, lever arms centimetres off, time
 offsets 0, IMU intrinsics at their defaults).
 
-    python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--aux-model imu2]
-        [--gyro-model upper] [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
-        [--max-offset-ms 10] [--cam-rate 20] [--images] [--image-scale 1]
+    python3 scripts/spec_sim.py --out DATA [--seed N] [--duration S] [--base-model imu2]
+        [--g-sensitivity full|upper|none] [--aux-imus imu2[,MODEL]] [--gyros upper[,MODEL]]
+        [--cameras radtan,equidistant[,LENS]]
+        [--camera-only] [--imu-rates 200,250,400] [--cam-rate 20] [--noise-scale 1]
+        [--t0-ns N] [--board-hidden F] [--min-frame-corners 8] [--style block|flow|messy]
+        [--target aprilgrid|kalibr-aprilgrid|checkerboard] [--rolling-shutter]
+        [--max-offset-ms 10] [--images] [--image-scale 1]
+
+Without options (and for a given seed) it writes the same dataset as its first version, the one
+docs/initialisation.md's tables measured.
 """
 
 import argparse
 import math
 import os
 import random
+import re
 import sys
 import time
 
@@ -277,6 +285,9 @@ def kannala_brandt(k, th):
 def project(cam, p_C):
     if p_C[2] < 0.05:
         return None
+    model = cam["camera_model"]
+    if model != "pinhole":
+        return project_central(cam, p_C)
     x, y = p_C[0] / p_C[2], p_C[1] / p_C[2]
     k = cam["distortion_coeffs"]
     if cam["distortion_model"] == "radtan":
@@ -292,6 +303,75 @@ def project(cam, p_C):
         xd, yd = x, y
     fu, fv, pu, pv = cam["intrinsics"]
     return fu * xd + pu, fv * yd + pv
+
+
+def project_central(cam, p_C):
+    """SPEC 4's models with a projection parameter, as Kalibr and basalt define them:
+    omni (Mei's unified model): m = (X, Y) / (Z + xi d), d = |p|, then radtan on m if given;
+    ds (double sphere): d1 = |p|, d2 = |(X, Y, xi d1 + Z)|, m = (X, Y) / (alpha d2 + (1 - alpha)
+    (xi d1 + Z)); eucm: d = sqrt(beta (X^2 + Y^2) + Z^2), m = (X, Y) / (alpha d + (1 - alpha) Z).
+    Points outside a model's valid cone are left out (a detector would not see them either)."""
+    X, Y, Z = p_C
+    q = cam["intrinsics"]
+    d = norm(p_C)
+    if cam["camera_model"] == "omni":
+        xi, (fu, fv, pu, pv) = q[0], q[1:]
+        den = Z + xi * d
+        if den <= 0.1 * d:
+            return None
+        x, y = X / den, Y / den
+        if cam["distortion_model"] == "radtan":
+            x, y = radtan(cam["distortion_coeffs"], x, y)
+    elif cam["camera_model"] == "ds":
+        xi, alpha, fu, fv, pu, pv = q
+        zz = xi * d + Z
+        den = alpha * math.sqrt(X * X + Y * Y + zz * zz) + (1.0 - alpha) * zz
+        if den <= 0.1 * d:
+            return None
+        x, y = X / den, Y / den
+    elif cam["camera_model"] == "eucm":
+        alpha, beta, fu, fv, pu, pv = q
+        den = alpha * math.sqrt(beta * (X * X + Y * Y) + Z * Z) + (1.0 - alpha) * Z
+        if den <= 0.1 * d:
+            return None
+        x, y = X / den, Y / den
+    else:
+        raise ValueError("unknown camera_model " + cam["camera_model"])
+    return fu * x + pu, fv * y + pv
+
+
+# The lenses --cameras offers: SPEC 4's (camera_model, distortion_model) pairs.
+LENSES = {"radtan": ("pinhole", "radtan"), "equidistant": ("pinhole", "equidistant"),
+          "pinhole": ("pinhole", "none"), "omni": ("omni", "none"),
+          "omni-radtan": ("omni", "radtan"), "ds": ("ds", "none"), "eucm": ("eucm", "none")}
+
+
+def set_lens(cam, lens, rng):
+    """Gives `cam` (which has a pinhole focal length f for its field of view) the lens `lens`, with
+    about the same field of view: Mei's and the double sphere's focal length near the axis is
+    fu / (1 + xi), the EUCM's fu."""
+    f, _, pu, pv = cam["intrinsics"][-4:]
+    wide = f < 300.0
+    cam["camera_model"], cam["distortion_model"] = LENSES[lens]
+    cam["distortion_coeffs"] = []
+    if lens == "radtan":
+        cam["distortion_coeffs"] = ([-0.05 + rng.uniform(-0.01, 0.01), 0.004, 1.5e-4, -1.0e-4]
+                                    if wide else
+                                    [-0.28 + rng.uniform(-0.02, 0.02), 0.075, 2.1e-4, -1.4e-4])
+    elif lens == "equidistant":
+        cam["distortion_coeffs"] = [-0.012 + rng.uniform(-0.003, 0.003), 0.021, -0.018, 0.0045]
+    elif lens == "omni-radtan":
+        cam["distortion_coeffs"] = [-0.04 + rng.uniform(-0.01, 0.01), 0.006, 1.2e-4, -0.8e-4]
+    fv_ratio = cam["intrinsics"][-3] / f
+    if lens in ("omni", "omni-radtan"):
+        xi = 0.9 + rng.uniform(-0.1, 0.1)
+        cam["intrinsics"] = [xi, f * (1.0 + xi), f * (1.0 + xi) * fv_ratio, pu, pv]
+    elif lens == "ds":
+        xi, alpha = -0.18 + rng.uniform(-0.04, 0.04), 0.59 + rng.uniform(-0.03, 0.03)
+        cam["intrinsics"] = [xi, alpha, f * (1.0 + xi), f * (1.0 + xi) * fv_ratio, pu, pv]
+    elif lens == "eucm":
+        alpha, beta = 0.6 + rng.uniform(-0.03, 0.03), 1.05 + rng.uniform(-0.05, 0.05)
+        cam["intrinsics"] = [alpha, beta, f, f * fv_ratio, pu, pv]
 
 
 # --------------------------------------------------------------------------------------------
@@ -334,15 +414,18 @@ def random_full9(rng, scale_err, skew):
             for i in range(9)]
 
 
-def imu_truth(rng, model, noise, T_B_S=None, offset=None):
+def imu_truth(rng, model, noise, T_B_S=None, offset=None, g_sensitivity="full"):
+    """An IMU's truth; `g_sensitivity` none leaves the key out (SPEC 7's default)."""
     s = {"type": "imu", "model": model, "noise": noise}
     if model != "none":
         s["Dw"] = random_full9(rng, 0.01, 0.005) if model == "imu3" else random_upper6(
             rng, 0.01, 0.005)
         s["Da"] = random_full9(rng, 0.01, 0.005) if model == "imu4" else random_upper6(
             rng, 0.01, 0.005)
-        s["g_sensitivity"] = "full"
-        s["Tg"] = [rng.uniform(-1e-3, 1e-3) for _ in range(9)]
+        if g_sensitivity != "none":
+            s["g_sensitivity"] = g_sensitivity
+            n = 9 if g_sensitivity == "full" else 6
+            s["Tg"] = [rng.uniform(-1e-3, 1e-3) for _ in range(n)]
         if model == "imu1":
             s["R_I_w"] = random_rotation(rng, 1.0)
         if model == "imu2":
@@ -435,6 +518,7 @@ def camera_pose(traj, R_B_C, t_B_C, t):
 # the base last).
 
 BASE, AUX, GYRO, CAM_L, CAM_R = "body", "aux_imu", "fog", "left", "right"
+CAMERAS = [CAM_L, CAM_R, "third"]
 
 
 def make_target(kind):
@@ -489,27 +573,81 @@ def make_rig(rng, args):
                  "accelerometer_random_walk": 6.0e-5}
     gyro_noise = {"update_rate": 400.0, "gyroscope_noise_density": 5.0e-5,
                   "gyroscope_random_walk": 1.0e-6}
-    base = imu_truth(rng, "imu2", imu_noise)
-    base["estimate"] = ["intrinsics"]
-    aux = imu_truth(rng, args.aux_model, aux_noise,
-                    transform(mm(rot_z(math.radians(90.0)), random_rotation(rng, 5.0)),
-                              [-0.04, 0.06 + rng.uniform(-0.01, 0.01), 0.02]), offset(-1.0))
-    # SPEC 3: a `none` model has no intrinsics to estimate.
-    aux["estimate"] = ["extrinsics", "time_offset"] + (
-        [] if args.aux_model == "none" else ["intrinsics"])
-    gyro = {"type": "gyro", "model": args.gyro_model, "noise": gyro_noise,
-            "T_B_S": transform(mm(rot_x(math.radians(180.0)), random_rotation(rng, 4.0)),
-                               [0.02, -0.05, 0.01]), "time_offset": offset(1.0)}
-    if args.gyro_model == "upper":
-        gyro["Dw"] = random_upper6(rng, 0.01, 0.005)
-    elif args.gyro_model == "full":
-        # Its frame is the one D_w fixes and its rotation may not be estimated (SPEC 3): T_B_S
-        # keeps the mounting rotation, D_w carries scale and misalignment only.
-        gyro["Dw"] = random_full9(rng, 0.01, 0.005)
-    gyro["estimate"] = (["time_offset"] if args.gyro_model == "full" else
-                        ["extrinsics", "time_offset"]) + (
-        [] if args.gyro_model == "none" else ["intrinsics"])
-    return {CAM_R: right, GYRO: gyro, CAM_L: left, AUX: aux, BASE: base}, R_B_L, t_B_L
+    rates = [float(x) for x in args.imu_rates.split(",")]
+    for noise, rate in zip((imu_noise, aux_noise, gyro_noise), rates):
+        noise["update_rate"] = rate
+        for key in noise:
+            if key != "update_rate":
+                noise[key] *= args.noise_scale
+    for cam in (left, right):
+        cam["noise"]["pixel_sigma"] *= args.noise_scale
+    base = imu_truth(rng, args.base_model, imu_noise, g_sensitivity=args.g_sensitivity)
+    base["estimate"] = [] if args.base_model == "none" else ["intrinsics"]
+    aux_models = [m for m in args.aux_imus.split(",") if m]
+    gyro_models = [m for m in args.gyros.split(",") if m]
+    # Mountings of the first and second auxiliary IMU and gyro: turned by a right angle about
+    # another axis each, so that no two inertial frames are alike.
+    aux_mounts = [(rot_z(math.radians(90.0)), [-0.04, 0.06, 0.02]),
+                  (rot_y(math.radians(-90.0)), [0.05, -0.03, -0.02])]
+    gyro_mounts = [(rot_x(math.radians(180.0)), [0.02, -0.05, 0.01]),
+                   (rot_z(math.radians(-90.0)), [-0.03, 0.02, 0.04])]
+
+    def add_aux(i):
+        model = aux_models[i]
+        R0, t = aux_mounts[i]
+        aux = imu_truth(rng, model, aux_noise,
+                        transform(mm(R0, random_rotation(rng, 5.0)),
+                                  [t[0], t[1] + rng.uniform(-0.01, 0.01), t[2]]),
+                        offset(-1.0 if i == 0 else 1.0), args.g_sensitivity)
+        # SPEC 3: a `none` model has no intrinsics to estimate.
+        aux["estimate"] = ["extrinsics", "time_offset"] + (
+            [] if model == "none" else ["intrinsics"])
+        return aux
+
+    def add_gyro(i):
+        model = gyro_models[i]
+        R0, t = gyro_mounts[i]
+        gyro = {"type": "gyro", "model": model, "noise": dict(gyro_noise),
+                "T_B_S": transform(mm(R0, random_rotation(rng, 4.0)), t),
+                "time_offset": offset(1.0 if i == 0 else -1.0)}
+        if model == "upper":
+            gyro["Dw"] = random_upper6(rng, 0.01, 0.005)
+        elif model == "full":
+            # Its frame is the one D_w fixes and its rotation may not be estimated (SPEC 3):
+            # T_B_S keeps the mounting rotation, D_w carries scale and misalignment only.
+            gyro["Dw"] = random_full9(rng, 0.01, 0.005)
+        gyro["estimate"] = (["time_offset"] if model == "full" else
+                            ["extrinsics", "time_offset"]) + (
+            [] if model == "none" else ["intrinsics"])
+        return gyro
+
+    # The draws of the default rig come first and in their first order, so that a seed's default
+    # dataset stays the one the docs' tables measured.
+    aux0 = add_aux(0) if aux_models else None
+    gyro0 = add_gyro(0) if gyro_models else None
+    lenses = args.cameras.split(",")
+    cams = [left, right][:len(lenses)]
+    if len(lenses) > 2:
+        # A third camera 9 cm left of the left one, looking 25 deg left and 10 deg down.
+        third = dict(left, noise=dict(left["noise"]), estimate=list(left["estimate"]))
+        third["T_B_S"] = transform(mm(R_B_L, exp_so3([math.radians(-10.0),
+                                                      math.radians(-25.0), 0.002])),
+                                   add(t_B_L, mv(R_B_L, [-0.09, 0.004, 0.002])))
+        third["time_offset"] = offset(1.0)
+        third["intrinsics"] = [300.0 + rng.uniform(-5, 5), 301.0 + rng.uniform(-5, 5),
+                               320.0 + rng.uniform(-4, 4), 240.0 + rng.uniform(-4, 4)]
+        cams.append(third)
+    for i, (cam, lens) in enumerate(zip(cams, lenses)):
+        if lens != ("radtan", "equidistant", "radtan")[i] or i == 2:
+            set_lens(cam, lens, rng)
+    sensors = dict(zip(CAMERAS, cams))
+    sensors.update({GYRO: gyro0, AUX: aux0, BASE: base})
+    if len(aux_models) > 1:
+        sensors[AUX + "2"] = add_aux(1)
+    if len(gyro_models) > 1:
+        sensors[GYRO + "2"] = add_gyro(1)
+    order = [CAM_R, GYRO, CAM_L, CAMERAS[2], AUX, AUX + "2", GYRO + "2", BASE]
+    return ({name: sensors[name] for name in order if sensors.get(name)}, R_B_L, t_B_L)
 
 
 # --------------------------------------------------------------------------------------------
@@ -578,7 +716,7 @@ def write_inertial(out, name, s, traj, g_W, t0_ns, duration, rng, groundtruth):
 
 
 def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, rng,
-                  per_corner_sigma, folder=None):
+                  per_corner_sigma, folder=None, board_visible=lambda t: True, min_corners=8):
     """DATA/<name>/corners.csv (or <folder>/corners.csv with the exact projections: the truth of
     rendered images); returns (frames, corners, image cells of a 4x4 grid covered)."""
     folder = folder or os.path.join(out, name)
@@ -590,6 +728,8 @@ def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, r
     lines, frames, n, cells = [], 0, 0, set()
     for st in stamps(t0_ns + 25000000, duration - 0.05, rate):
         t_img = (st - t0_ns) * 1e-9 + cam["time_offset"]
+        if not board_visible(t_img):
+            continue
         pose_at_stamp = camera_pose(traj, R_B_C, t_B_C, t_img)
         frame = []
         for group in groups:
@@ -613,7 +753,7 @@ def write_corners(out, name, cam, traj, points, groups, t0_ns, duration, rate, r
                 seen.append((cid, uv))
             if len(seen) == len(group):
                 frame += seen
-        if len(frame) < 8:
+        if len(frame) < min_corners:
             continue
         frames += 1
         n += len(frame)
@@ -658,9 +798,11 @@ def coarse_guess(truth, rng):
         if s["type"] == "camera":
             f = 1.0 + rng.choice([-1.0, 1.0]) * rng.uniform(0.03, 0.05)
             w, h = s["resolution"]
-            s["intrinsics"] = [round(s["intrinsics"][0] * f), round(s["intrinsics"][0] * f),
-                               (w - 1) / 2.0, (h - 1) / 2.0]
-            s["distortion_coeffs"] = [0.0] * 4
+            # A projection parameter (xi, alpha, beta) to a datasheet's one decimal.
+            n = len(s["intrinsics"]) - 4
+            proj, fu = [round(x, 1) for x in s["intrinsics"][:n]], s["intrinsics"][n]
+            s["intrinsics"] = proj + [round(fu * f), round(fu * f), (w - 1) / 2.0, (h - 1) / 2.0]
+            s["distortion_coeffs"] = [0.0] * len(s["distortion_coeffs"])
             if "line_delay" in s:
                 s["line_delay"] = 0.0
         else:
@@ -672,7 +814,8 @@ def coarse_guess(truth, rng):
                 R = mm(random_rotation(rng, 4.0), R)
                 t = add(t, [rng.choice([-1.0, 1.0]) * rng.uniform(0.01, 0.03) for _ in range(3)])
             s["T_B_S"] = transform(R, t)
-            s["time_offset"] = 0.0
+            if "time_offset" in s:
+                s["time_offset"] = 0.0
         guess[name] = s
     return guess
 
@@ -680,13 +823,125 @@ def coarse_guess(truth, rng):
 # --------------------------------------------------------------------------------------------
 
 
+def camera_only_truth(truth, R_B_L, t_B_L):
+    """SPEC 7's camera-only rig of the same cameras: the left camera is the reference `B`, every
+    other camera's T_B_S is its pose in the left camera, no time offsets (the cameras expose at
+    once) and no inertial sensors."""
+    T_L_B = transform(tr(R_B_L), scale(-1.0, mtv(R_B_L, t_B_L)))
+    rig = {}
+    for name, s in truth.items():
+        if s["type"] != "camera":
+            continue
+        s = dict(s)
+        s.pop("time_offset", None)
+        s.pop("line_delay", None)
+        if name == CAM_L:
+            s.pop("T_B_S")
+            s["estimate"] = ["intrinsics"]
+        else:
+            R, t = rotation_translation(s["T_B_S"])
+            R_L_B, t_L_B = rotation_translation(T_L_B)
+            s["T_B_S"] = transform(mm(R_L_B, R), add(mv(R_L_B, t), t_L_B))
+            s["estimate"] = ["intrinsics", "extrinsics"]
+        rig[name] = s
+    return rig
+
+
+def sci(x):
+    """A number in another spelling: scientific notation with a signed exponent."""
+    return "%.9e" % x
+
+
+def restyle_csv(path):
+    """The same CSV as another program might write it: CRLF line ends, a blank after each comma,
+    floating-point columns in scientific notation (integer columns stay integers)."""
+    with open(path) as f:
+        lines = f.read().splitlines()
+    out = []
+    for line in lines:
+        if line.startswith("#"):
+            out.append(line)
+            continue
+        fields = line.split(",")
+        out.append(", ".join(sci(float(x)) if re.fullmatch(r"-?[0-9.]+(e[-+]?[0-9]+)?", x) and
+                             ("." in x or "e" in x) else x for x in fields))
+    with open(path, "w", newline="") as f:
+        f.write("\r\n".join(out) + "\r\n")
+
+
+def restyle_yaml(path):
+    """CRLF line ends, a comment on every line that can take one, every decimal number in
+    scientific notation."""
+    with open(path) as f:
+        lines = f.read().splitlines()
+    out = []
+    for line in lines:
+        if not line.startswith("#"):
+            line = re.sub(r"(?<![\w.])-?[0-9]+\.[0-9]+(e[-+]?[0-9]+)?(?![\w.])",
+                          lambda m: sci(float(m.group(0))), line)
+            if line.endswith(",") or line.endswith("}") or not line.startswith(" "):
+                line += "  # " + ("a sensor's key" if line.startswith(" ") else "a top-level key")
+        out.append(line)
+    with open(path, "w", newline="") as f:
+        f.write("\r\n".join(out) + "\r\n")
+
+
+def write_flow_rig(path, comment, base, gravity_magnitude, target, sensors, gravity_W=None):
+    """SPEC 7's example's style: top-level keys first, one flow mapping per sensor."""
+    lines = ["# " + comment, "base_imu: " + base, "gravity_magnitude: " + fmt(gravity_magnitude),
+             "target: {" + ", ".join("%s: %s" % (k, yaml_value(v)) for k, v in target.items())
+             + "}"]
+    if gravity_W is not None:
+        lines.append("gravity_W: %s" % yaml_value(gravity_W))
+    lines.append("sensors:")
+    for name, s in sensors.items():
+        items = []
+        for key in reversed(SENSOR_KEY_ORDER):
+            if key not in s:
+                continue
+            v = s[key]
+            if key == "noise":
+                v = "{" + ", ".join("%s: %s" % (k, yaml_value(x)) for k, x in v.items()) + "}"
+            else:
+                v = yaml_value(v)
+            items.append("%s: %s" % (key, v))
+        lines.append("  %s: {%s}" % (name, ",\n      ".join(items)))
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--duration", type=float, default=18.0)
-    ap.add_argument("--aux-model", default="imu2", choices=["none", "imu1", "imu2", "imu3", "imu4"])
-    ap.add_argument("--gyro-model", default="upper", choices=["none", "upper", "full"])
+    models = ["none", "imu1", "imu2", "imu3", "imu4"]
+    ap.add_argument("--base-model", default="imu2", choices=models)
+    ap.add_argument("--g-sensitivity", default="full", choices=["none", "upper", "full"],
+                    help="every IMU's T_g: 9 numbers, 6 (upper-triangular) or none")
+    ap.add_argument("--aux-imus", default="imu2",
+                    help="models of 0-2 auxiliary IMUs, comma-separated ('' for none)")
+    ap.add_argument("--gyros", default="upper",
+                    help="models (none, upper, full) of 0-2 gyroscopes, comma-separated")
+    ap.add_argument("--cameras", default="radtan,equidistant",
+                    help="lenses of 1-3 cameras, comma-separated: " + ", ".join(LENSES))
+    ap.add_argument("--camera-only", action="store_true",
+                    help="a camera-only rig (SPEC 7): the cameras alone, the first the reference")
+    ap.add_argument("--imu-rates", default="200,250,400",
+                    help="Hz of the base IMU, the auxiliary IMUs and the gyros")
+    ap.add_argument("--noise-scale", type=float, default=1.0,
+                    help="multiplies every noise density, random walk and pixel sigma")
+    ap.add_argument("--t0-ns", type=int, default=1700000000123456789,
+                    help="the base IMU's first stamp")
+    ap.add_argument("--board-hidden", type=float, default=0.0,
+                    help="fraction of the recording in which the board is out of sight "
+                    "(two gaps, around 30 %% and 70 %% of it)")
+    ap.add_argument("--min-frame-corners", type=int, default=8,
+                    help="frames with fewer corners are left out (4: a single tag's frames too)")
+    ap.add_argument("--style", default="block", choices=["block", "flow", "messy"],
+                    help="block: block-style YAML, plain CSV; flow: SPEC 7's flow style; messy: "
+                    "flow style with comments, CRLF, blanks after commas, scientific notation, "
+                    "and camera data.csv files naming images that do not exist")
     ap.add_argument("--target", default="aprilgrid",
                     choices=["aprilgrid", "kalibr-aprilgrid", "checkerboard"],
                     help="aprilgrid: 7x5 tags of 6 cm; kalibr-aprilgrid: 6x6 of 8.8 cm")
@@ -700,10 +955,23 @@ def main():
     ap.add_argument("--image-scale", type=float, default=1.0,
                     help="scale the cameras' resolution and intrinsics (0.5: half-size images)")
     args = ap.parse_args()
+    lenses = args.cameras.split(",")
+    aux_models = [m for m in args.aux_imus.split(",") if m]
+    gyro_models = [m for m in args.gyros.split(",") if m]
+    if not 1 <= len(lenses) <= 3 or any(x not in LENSES for x in lenses):
+        ap.error("--cameras: 1-3 of " + ", ".join(LENSES))
+    if len(aux_models) > 2 or any(m not in models for m in aux_models):
+        ap.error("--aux-imus: 0-2 of " + ", ".join(models))
+    if len(gyro_models) > 2 or any(m not in ("none", "upper", "full") for m in gyro_models):
+        ap.error("--gyros: 0-2 of none, upper, full")
+    if args.rolling_shutter and (len(lenses) < 2 or args.camera_only):
+        ap.error("--rolling-shutter is the second camera's, on a rig with IMUs")
     if args.images and args.target == "checkerboard":
         # SPEC 5 numbers a checkerboard's corners but does not fix which printed corner is the
         # first (a detector's choice under the board's 180 deg symmetry).
         ap.error("--images renders an AprilGrid only")
+    if args.images and (any(LENSES[x][0] != "pinhole" for x in lenses) or args.board_hidden):
+        ap.error("--images renders pinhole lenses, the board always in sight")
     render = None
     if args.images:
         sys.modules.setdefault("spec_sim", sys.modules[__name__])  # spec_render uses this module
@@ -719,7 +987,7 @@ def main():
     rng = random.Random(args.seed)
     out = args.out
     os.makedirs(out, exist_ok=True)
-    t0_ns = 1700000000123456789  # unix-epoch-like stamps, as real recordings have
+    t0_ns = args.t0_ns
     g_mag = 9.80665
 
     target, points, groups = make_target(args.target)
@@ -731,8 +999,13 @@ def main():
     gdir = [rng.uniform(-0.2, 0.2), -1.0 if args.images else 1.0, rng.uniform(-0.3, 0.3)]
     g_W = scale(g_mag / norm(gdir), gdir)
     truth, R_B_L, t_B_L = make_rig(rng, args)
-    for name in (CAM_L, CAM_R):
+    cameras = [name for name in CAMERAS if name in truth]
+    inertial = [] if args.camera_only else [n for n in (BASE, AUX, AUX + "2", GYRO, GYRO + "2")
+                                            if n in truth]
+    for name in cameras:
         scale_camera(truth[name], args.image_scale)
+        if args.camera_only:  # SPEC 7: the cameras expose at once, at their stamps
+            truth[name]["time_offset"] = 0.0
 
     # The motion: the left camera looks at the board's centre from 0.75 m in front: from the
     # board's -z side for corners, so that the board's x and y read as the image's u and v; from
@@ -743,12 +1016,17 @@ def main():
     p_W_B0 = sub([centre[0], centre[1], 0.75 if args.images else -0.75], mv(R_W_B0, t_B_L))
     traj = Trajectory(rng, p_W_B0, R_W_B0, pos_amp=0.22, rot_amp=0.45)
     self_check(traj)
+    gaps = [(f * args.duration - 0.25 * args.board_hidden * args.duration,
+             f * args.duration + 0.25 * args.board_hidden * args.duration) for f in (0.3, 0.7)]
 
-    for name in (BASE, AUX, GYRO):
+    def board_visible(t):
+        return not any(a <= t < b for a, b in gaps)
+
+    for name in inertial:
         write_inertial(out, name, truth[name], traj, g_W, t0_ns, args.duration, rng,
                        groundtruth=name == BASE)
     stats = {}
-    for i, name in enumerate((CAM_L, CAM_R)):  # the left camera writes the optional sigma column
+    for i, name in enumerate(cameras):  # the left camera writes the optional sigma column
         if render:
             stats[name] = render.write_images(out, name, truth[name], traj, target, t0_ns,
                                               args.duration, args.cam_rate, args.seed * 10 + i)
@@ -757,21 +1035,41 @@ def main():
                           args.cam_rate, None, False, os.path.join(out, "groundtruth", name))
         else:
             stats[name] = write_corners(out, name, truth[name], traj, points, groups, t0_ns,
-                                        args.duration, args.cam_rate, rng, name == CAM_L)
+                                        args.duration, args.cam_rate, rng, name == CAM_L,
+                                        board_visible=board_visible,
+                                        min_corners=args.min_frame_corners)
+            if args.style == "messy":
+                with open(os.path.join(out, name, "data.csv"), "w") as f:
+                    f.write("#timestamp [ns],filename\n")
+                    f.writelines("%d,%d.png\n" % (st, st) for st in
+                                 stamps(t0_ns + 25000000, args.duration - 0.05, args.cam_rate))
 
-    write_rig(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
-              BASE, g_mag, target, truth, gravity_W=g_W)
-    write_rig(os.path.join(out, "rig.yaml"),
-              "coarse hand-made guess written by scripts/spec_sim.py", BASE, g_mag, target,
-              coarse_guess(truth, rng))
+    base = BASE
+    if args.camera_only:
+        truth, base, g_W = camera_only_truth(truth, R_B_L, t_B_L), CAM_L, None
+    write = write_rig if args.style == "block" else write_flow_rig
+    write(os.path.join(out, "truth.yaml"), "ground truth written by scripts/spec_sim.py",
+          base, g_mag, target, truth, gravity_W=g_W)
+    write(os.path.join(out, "rig.yaml"),
+          "coarse hand-made guess written by scripts/spec_sim.py", base, g_mag, target,
+          coarse_guess(truth, rng))
+    if args.style == "messy":
+        for root, _, files in os.walk(out):
+            for f in files:
+                if f.endswith(".csv"):
+                    restyle_csv(os.path.join(root, f))
+        for f in ("truth.yaml", "rig.yaml"):
+            restyle_yaml(os.path.join(out, f))
 
     form = ("%s %d images (%d with a whole tag), %.1f s" if render else
             "%s %d frames %d corners %d/16 image cells")
-    cameras = ", ".join(form % ((k,) + v) for k, v in stats.items())
-    print("spec_sim: %s, %.1f s, seed %d, aux %s, gyro %s, %s%s%s; %s; %.1f s" % (
-        out, args.duration, args.seed, args.aux_model, args.gyro_model, args.target,
+    cams = ", ".join(form % ((k,) + v) for k, v in stats.items())
+    kinds = ("camera-only" if args.camera_only else "base %s, aux [%s], gyros [%s]" % (
+        args.base_model, args.aux_imus, args.gyros))
+    print("spec_sim: %s, %.1f s, seed %d, %s, cameras [%s], %s%s%s; %s; %.1f s" % (
+        out, args.duration, args.seed, kinds, args.cameras, args.target,
         ", rolling shutter" if args.rolling_shutter else "",
-        ", images (tag bits checked against %s)" % tag_check if render else "", cameras,
+        ", images (tag bits checked against %s)" % tag_check if render else "", cams,
         time.time() - wall))
     return 0
 

@@ -24,24 +24,26 @@ std::vector<RateSample> RatesFromGyro(const std::vector<GyroSample>& samples) {
   return rates;
 }
 
-std::vector<RateSample> RatesFromBoardViews(const std::vector<BoardView>& views) {
+std::vector<RateSample> RatesFromBoardViews(const std::vector<BoardView>& views, int stride) {
   std::vector<RateSample> rates;
-  if (views.size() < 2)
+  const std::size_t step = static_cast<std::size_t>(std::max(stride, 1));
+  if (views.size() < step + 1)
     return rates;
   std::vector<std::int64_t> gaps;
   for (std::size_t k = 1; k < views.size(); ++k)
     gaps.push_back(views[k].t_ns - views[k - 1].t_ns);
   std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
-  const double max_gap = 1.5 * static_cast<double>(gaps[gaps.size() / 2]);
-  for (std::size_t k = 1; k < views.size(); ++k) {
-    const std::int64_t dt_ns = views[k].t_ns - views[k - 1].t_ns;
+  const double max_gap =
+      1.5 * static_cast<double>(step) * static_cast<double>(gaps[gaps.size() / 2]);
+  for (std::size_t k = step; k < views.size(); ++k) {
+    const BoardView& v0 = views[k - step];
+    const std::int64_t dt_ns = views[k].t_ns - v0.t_ns;
     if (dt_ns <= 0 || static_cast<double>(dt_ns) > max_gap)
       continue;
     // R_W_C(t0)^T R_W_C(t1) = R_C_W(t0) R_C_W(t1)^T.
-    const Eigen::Matrix3d dR = views[k - 1].T_C_W.linear() * views[k].T_C_W.linear().transpose();
+    const Eigen::Matrix3d dR = v0.T_C_W.linear() * views[k].T_C_W.linear().transpose();
     const double span = static_cast<double>(dt_ns) * 1e-9;
-    rates.push_back(
-        {views[k - 1].t_ns + dt_ns / 2, LogSO3<double>(Eigen::Quaterniond(dR)) / span, span});
+    rates.push_back({v0.t_ns + dt_ns / 2, LogSO3<double>(Eigen::Quaterniond(dR)) / span, span});
   }
   return rates;
 }

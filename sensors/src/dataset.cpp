@@ -70,6 +70,9 @@ class CsvFile {
       ++line_no_;
       if (!line.empty() && line.back() == '\r')
         line.pop_back();
+      // A UTF-8 byte order mark, as Windows programs start a "CSV UTF-8" file with it.
+      if (line_no_ == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0)
+        line.erase(0, 3);
       if (line_no_ == 1 && !line.empty() && line[0] == '#') {
         header_columns_ = static_cast<int>(SplitFields(line.substr(1)).size());
         continue;

@@ -69,7 +69,8 @@ void ExpectCoarseGuess(const RigConfig& truth, const RigConfig& guess) {
     }
     if (t.type != SensorType::kCamera)
       continue;
-    const double f_ratio = g->intrinsics[0] / t.intrinsics[0];
+    const std::size_t fu = t.intrinsics.size() - 4;  // omni, ds, eucm: after xi, alpha, beta
+    const double f_ratio = g->intrinsics[fu] / t.intrinsics[fu];
     EXPECT_GT(std::abs(f_ratio - 1.0), 0.025) << t.name;
     for (double k : g->distortion_coeffs) {
       EXPECT_EQ(k, 0.0) << t.name;
@@ -165,6 +166,10 @@ KalibrImu InFrameI(KalibrImu k) {
 // inverted matrix would be off by the truth's 1 % scale / 0.5 % misalignment.
 void ExpectKalibrIntrinsics(const YAML::Node& truth_imu, const YAML::Node& kalibr,
                             const std::string& name) {
+  if (truth_imu["model"] && truth_imu["model"].as<std::string>() == "none") {
+    EXPECT_EQ(kalibr["model"].as<std::string>(), "calibrated") << name;  // no intrinsics
+    return;
+  }
   const KalibrImu k = InFrameI(KalibrImuOfTruth(truth_imu));
   ASSERT_EQ(kalibr["model"].as<std::string>(), "scale-misalignment") << name;
   const double err_Ma = (Matrix3(kalibr["accelerometers"]["M"]) - k.M_a).cwiseAbs().maxCoeff();
@@ -190,23 +195,27 @@ std::string SensorOfTopic(const RigConfig& truth, const std::string& topic) {
 }
 
 void ExpectSamePose(const Eigen::Matrix4d& T_file, const Eigen::Matrix4d& T_expected,
-                    double max_deg, const std::string& what) {
+                    const issue7::Issue7Tolerances& tol, const std::string& what) {
   const Eigen::Matrix4d E = T_file * T_expected.inverse();
   std::printf("  %-20s %.4f deg, %.3f mm\n", what.c_str(), AngleDeg(E.block(0, 0, 3, 3)),
               E.block(0, 3, 3, 1).norm() * 1e3);
-  EXPECT_LT(AngleDeg(E.block(0, 0, 3, 3)), max_deg) << what;
-  EXPECT_LT(E.block(0, 3, 3, 1).norm(), 3e-3) << what;
+  EXPECT_LT(AngleDeg(E.block(0, 0, 3, 3)), tol.rotation_deg) << what;
+  EXPECT_LT(E.block(0, 3, 3, 1).norm(), tol.translation_m) << what;
 }
 
 // The Kalibr files (SPEC 1, 2, 7 name them; docs/files.md "Kalibr files"), checked against the
 // script's truth, not against ctcal's result: T_cam_imu = inverse(T_B_C) (SPEC 1, literally: B is
 // the base IMU's frame I of section 3, not Kalibr's accelerometer-aligned frame),
 // timeshift_cam_imu = time_offset (t_imu = t_cam + shift), T_cn_cnm1 = T_Cn_B T_B_Cn-1, and an
-// auxiliary IMU's T_i_b = inverse(T_B_S) and time_offset. The bar is issue 7's 0.05 deg; Kalibr's
-// frame i instead of I would be off by the accelerometer's misalignment (0.6-1 deg here).
-void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, const fs::path& out) {
+// auxiliary IMU's T_i_b = inverse(T_B_S) and time_offset. The bar is the test's (issue 7's 0.05 deg
+// unless stated); Kalibr's frame i instead of I would be off by the accelerometer's misalignment
+// (0.6-1 deg here). A camera-only rig's camchain.yaml has T_cn_cnm1 only, and there is no imu.yaml.
+void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, const fs::path& out,
+                       const issue7::Issue7Tolerances& tol) {
   const YAML::Node sensors = truth_yaml["sensors"];
-  const YAML::Node chain = YAML::LoadFile((out / "camchain-imucam.yaml").string());
+  const bool camera_only = truth.IsCameraOnly();
+  const YAML::Node chain =
+      YAML::LoadFile((out / (camera_only ? "camchain.yaml" : "camchain-imucam.yaml")).string());
   std::map<std::string, std::string> name_of;  // cam0 -> sensor
   for (const auto& entry : chain)
     name_of[entry.first.as<std::string>()] =
@@ -218,15 +227,23 @@ void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, con
   for (const auto& entry : chain) {
     const std::string key = entry.first.as<std::string>();
     const SensorConfig& cam = *truth.Find(name_of[key]);
-    ExpectSamePose(Matrix4(entry.second["T_cam_imu"]), cam.T_B_S.inverse(), 0.05,
-                   key + " T_cam_imu");
-    EXPECT_NEAR(entry.second["timeshift_cam_imu"].as<double>(), cam.time_offset, 0.5e-3) << key;
+    if (!camera_only) {
+      ExpectSamePose(Matrix4(entry.second["T_cam_imu"]), cam.T_B_S.inverse(), tol,
+                     key + " T_cam_imu");
+      EXPECT_NEAR(entry.second["timeshift_cam_imu"].as<double>(), cam.time_offset,
+                  tol.time_offset_s)
+          << key;
+    }
     if (entry.second["T_cn_cnm1"]) {
       const SensorConfig& prev =
           *truth.Find(name_of["cam" + std::to_string(std::stoi(key.substr(3)) - 1)]);
-      ExpectSamePose(Matrix4(entry.second["T_cn_cnm1"]), cam.T_B_S.inverse() * prev.T_B_S, 0.05,
+      ExpectSamePose(Matrix4(entry.second["T_cn_cnm1"]), cam.T_B_S.inverse() * prev.T_B_S, tol,
                      key + " T_cn_cnm1");
     }
+  }
+  if (camera_only) {
+    EXPECT_FALSE(fs::exists(out / "imu.yaml"));
+    return;
   }
   const YAML::Node imus = YAML::LoadFile((out / "imu.yaml").string());
   for (const auto& entry : imus) {
@@ -237,9 +254,10 @@ void ExpectKalibrFiles(const RigConfig& truth, const YAML::Node& truth_yaml, con
     if (name == truth.base_imu)
       continue;
     const SensorConfig& imu = *truth.Find(name);
-    ExpectSamePose(Matrix4(entry.second["T_i_b"]), imu.T_B_S.inverse(), 0.05, name + " T_i_b");
+    ExpectSamePose(Matrix4(entry.second["T_i_b"]), imu.T_B_S.inverse(), tol, name + " T_i_b");
     // Kalibr's IMU offset: t_ref = t_imu + timeOffset (IccSensors.py), SPEC's sign.
-    EXPECT_NEAR(entry.second["time_offset"].as<double>(), imu.time_offset, 0.5e-3) << name;
+    EXPECT_NEAR(entry.second["time_offset"].as<double>(), imu.time_offset, tol.time_offset_s)
+        << name;
   }
 }
 
@@ -386,8 +404,10 @@ void CheckCalibration(const std::string& stem, const std::string& args,
   // scalar may be left without a finite sigma.
   const issue7::ToleranceReport r = issue7::ExpectWithinTolerances(
       truth, result, [](const std::string&) { return false; }, tolerances);
-  ExpectKalibrFiles(truth, YAML::LoadFile((data / "truth.yaml").string()), data.string() + "_out");
-  ExpectTrajectory(data, data.string() + "_out");
+  ExpectKalibrFiles(truth, YAML::LoadFile((data / "truth.yaml").string()), data.string() + "_out",
+                    tolerances);
+  if (!truth.IsCameraOnly())  // SPEC 7: the ground truth trajectory is the base IMU's
+    ExpectTrajectory(data, data.string() + "_out");
   std::printf(
       "%s: rotation %.4f deg, translation %.3f mm, offset %.4f ms, focal %.3f px, "
       "worst %.2f sigma (%s)\n",
@@ -410,8 +430,40 @@ TEST(IndependentDataset, CoarseGuessMeetsTheIssueBar) {
 // with the checkerboard's 42 corners a camera's R_B_S sigma is ~0.02 deg per axis at 15 s.
 TEST(IndependentDataset, CheckerboardRollingShutterImu4LargeOffsets) {
   CheckCalibration("variant",
-                   "--seed 6 --duration 20 --aux-model imu4 --target checkerboard "
+                   "--seed 6 --duration 20 --aux-imus imu4 --target checkerboard "
                    "--rolling-shutter --max-offset-ms 50");
+}
+
+// Rigs from SPEC's other corners at once, with 3x the noise of the other tests (pixel_sigma 1.5 px,
+// every density and random walk 3x): an `imu1` base; two auxiliary IMUs, `imu3` and `none`; two
+// gyros, `full` and `upper`; an omni (Mei, xi ~0.9) and an equidistant camera; IMUs at 100 Hz, 400
+// Hz and gyros at 800 Hz; stamps from 0 ns; the board out of sight 20 % of the time; the rig files
+// in SPEC's flow style. At this noise the fisheye's rate between consecutive views (50 ms) was too
+// noisy for the time-offset correlation (peak 0.51 < 0.6: "ambiguous correlation", exit 2); the
+// stage now retries over 2 and 4 frame periods. The bar scales with the noise: 3x for
+// translations, offsets and focal lengths; rotations are sigma-limited here (the fisheye's R_B_S
+// sigma 0.04-0.09 deg per axis), so 0.3 deg; every estimate within 4 sigma, as everywhere.
+TEST(IndependentDataset, NoisyCornersAndOtherModelsRatesAndFiles) {
+  CheckOptions options;
+  options.tolerances.rotation_deg = 0.3;
+  options.tolerances.translation_m = 9e-3;
+  options.tolerances.time_offset_s = 1.5e-3;
+  options.tolerances.focal_px = 3.0;
+  CheckCalibration("noisy",
+                   "--seed 47 --duration 15 --noise-scale 3 --base-model imu1 --aux-imus imu3,none "
+                   "--gyros full,upper --imu-rates 100,400,800 --t0-ns 0 --board-hidden 0.2 "
+                   "--style flow --cameras omni,equidistant",
+                   options);
+}
+
+// A camera-only rig (SPEC 7: the first camera is the reference B, no offsets, no gravity) of a
+// pinhole-radtan, an omni and an EUCM camera, written the way another program might: flow-style
+// YAML with comments, CRLF line ends, blanks after commas, scientific notation, camera data.csv
+// files naming images that do not exist beside corners.csv, frames with a single tag (4 corners).
+TEST(IndependentDataset, CameraOnlyOtherModelsAndAnotherWritersFiles) {
+  CheckCalibration("camera_only",
+                   "--seed 36 --duration 10 --camera-only --cameras radtan,omni,eucm --style messy "
+                   "--min-frame-corners 4");
 }
 
 // Images only, detection included (issue 7: "Kalibr-style rendered images only": rotations 0.05

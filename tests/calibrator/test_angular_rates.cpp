@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/init/angular_rates.h"
+#include "ctcal/calibrator/spline_init.h"
 #include "ctcal/spline/so3.h"
 
 namespace ctcal {
@@ -142,6 +143,41 @@ TEST(BaseRateIntegral, FixedAxisMeanRateIsExact) {
   std::size_t cursor = 0;
   ASSERT_TRUE(integral.RateOver(t0, t1, &w, &cursor));
   EXPECT_NEAR((w - angle / (t1 - t0) * axis).norm(), 0.0, 1e-12);
+}
+
+// A camera turning about a fixed axis by theta(t) = 0.3 t + 0.2 t^2 (rad), seen at 20 Hz with the
+// view at 0.5 s missing: the rate between views k - stride and k is the angle they differ by over
+// their time apart, stamped at the midpoint with that span, and a pair bridging the gap (longer
+// than 1.5 stride frame periods) is left out. Stride 2 is the time-offset stage's retry on noisy
+// corners.
+TEST(RatesFromBoardViews, StrideSpansSeveralFramePeriods) {
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -1.0, 0.4).normalized();
+  const auto theta = [](double t) { return 0.3 * t + 0.2 * t * t; };
+  std::vector<BoardView> views;
+  for (int k = 0; k <= 40; ++k) {
+    if (k == 10)
+      continue;
+    BoardView v;
+    v.t_ns = 50000000LL * k;
+    const double t = Seconds(v.t_ns);
+    // T_C_W's rotation is R_W_C^T with R_W_C = Exp(theta axis).
+    v.T_C_W = Eigen::Isometry3d(ExpSO3<double>(Eigen::Vector3d(theta(t) * axis)).inverse());
+    views.push_back(v);
+  }
+  for (const int stride : {1, 2, 4}) {
+    const std::vector<RateSample> rates = RatesFromBoardViews(views, stride);
+    // Pairs k - stride, k of the 40 views; the gap makes a pair containing it stride + 1 periods
+    // long, over 1.5 stride periods for stride 1 only (2 > 1.5; 3, 5 are within 3, 6).
+    const std::size_t bridging = stride == 1 ? 1 : 0;
+    ASSERT_EQ(rates.size(), views.size() - static_cast<std::size_t>(stride) - bridging) << stride;
+    for (const RateSample& r : rates) {
+      const double t0 = Seconds(r.t_ns) - 0.5 * r.span, t1 = Seconds(r.t_ns) + 0.5 * r.span;
+      EXPECT_LE(r.span, 1.5 * stride * 0.05 + 1e-12);
+      EXPECT_GE(r.span, stride * 0.05 - 1e-12);
+      EXPECT_NEAR((r.w_S - (theta(t1) - theta(t0)) / r.span * axis).norm(), 0.0, 1e-9)
+          << "stride " << stride << " at " << r.t_ns;
+    }
+  }
 }
 
 }  // namespace

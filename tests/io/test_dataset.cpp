@@ -189,6 +189,26 @@ TEST(Dataset, ReadsFilesWithoutHeaderAndWithWindowsLineEnds) {
   EXPECT_EQ(ReadImuCsv(dir + "/imu1/data.csv").front().w_m.x(), -0.099134701513277898);
 }
 
+// A "CSV UTF-8" file of a Windows program starts with a byte order mark: the header after it is
+// still the header (it used to be read as a row, "timestamp '#timestamp [ns]' is not an integer"
+// with the mark invisible), and a file without a header reads its first row.
+TEST(Dataset, ByteOrderMarkBeforeTheFirstLineIsSkipped) {
+  const std::string dir = TempDir("bom");
+  WriteText(dir + "/imu0/data.csv",
+            "\xEF\xBB\xBF#timestamp [ns],w_x,w_y,w_z [rad/s],a_x,a_y,a_z [m/s^2]\r\n"
+            "100,1,2,3,4,5,6\r\n");
+  const std::vector<ImuSample> s = ReadImuCsv(dir + "/imu0/data.csv");
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(s[0].a_m.z(), 6.0);
+  WriteText(dir + "/imu1/data.csv",
+            "\xEF\xBB\xBF"
+            "100,1,2,3,4,5,6\n200,1,2,3,4,5,7\n");
+  const std::vector<ImuSample> t = ReadImuCsv(dir + "/imu1/data.csv");
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(t[0].t_ns, 100);
+  EXPECT_EQ(t[1].a_m.z(), 7.0);
+}
+
 // A blank line ends a file only at its end (tests/data/bad/imu_empty_line.csv: one in the
 // middle stays an error at its own line).
 TEST(Dataset, BlankLinesAtTheEndAreTheEndOfTheFile) {

@@ -29,8 +29,10 @@ std::vector<RateSample> RatesFromGyro(const std::vector<GyroSample>& samples);
 // stamped at their midpoint: w_C = Log(R_W_C(t0)^T R_W_C(t1)) / (t1 - t0). Finite differences
 // of poses rather than a fitted spline: between two views this is exact for the rotation the
 // camera made, and the base rate is integrated over the same interval (BaseRateIntegral), so the
-// two sides compare the same quantity without a smoothing prior.
-std::vector<RateSample> RatesFromBoardViews(const std::vector<BoardView>& views);
+// two sides compare the same quantity without a smoothing prior. With `stride` > 1 the views are
+// k - stride and k (at most 1.5 stride median periods apart): a pose's noise then weighs 1/stride
+// as much in the rate, for noisy corners, at the price of a rate averaged over a longer span.
+std::vector<RateSample> RatesFromBoardViews(const std::vector<BoardView>& views, int stride = 1);
 
 // Per-axis median of the readings: the approximate gyro bias of a recording whose rotations go
 // back and forth (a hand-held wave), good enough to centre the rate magnitude for correlation.
