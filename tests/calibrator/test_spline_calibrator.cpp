@@ -111,6 +111,15 @@ FastAndReference CalibrateFastAndReference(Change&& change) {
           CalibrateSpline(l.rig, l.data, reference, Quiet())};
 }
 
+// Both runs gated out the same corners of every camera in the same rounds.
+void ExpectSameOutliers(const SplineCalibrationResult& a, const SplineCalibrationResult& b) {
+  ASSERT_EQ(a.outliers.size(), b.outliers.size());
+  for (std::size_t i = 0; i < b.outliers.size(); ++i) {
+    EXPECT_EQ(a.outliers[i].corners, b.outliers[i].corners) << b.outliers[i].camera;
+    EXPECT_EQ(a.outliers[i].removed, b.outliers[i].removed) << b.outliers[i].camera;
+  }
+}
+
 // The stop criterion of the plain solves (SplineCalibratorOptions::stop_cost_change) bounds every
 // estimate's distance to the fully converged one by sqrt(2 * 0.005) = 0.1 of its sigma; the run
 // without it (Ceres' relative tolerances of 1e-10 only) is the reference.
@@ -135,11 +144,7 @@ TEST(SplineCalibrator, SpeedUpsKeepTheOutliersAndTheEstimates) {
     o->stacked_inertial_segments = 0;
     o->robust_early_stop = false;
   });
-  ASSERT_EQ(fast.outliers.size(), ref.outliers.size());
-  for (std::size_t i = 0; i < ref.outliers.size(); ++i) {
-    EXPECT_EQ(fast.outliers[i].corners, ref.outliers[i].corners) << ref.outliers[i].camera;
-    EXPECT_EQ(fast.outliers[i].removed, ref.outliers[i].removed) << ref.outliers[i].camera;
-  }
+  ExpectSameOutliers(fast, ref);
   EXPECT_LE(fast.iterations, ref.iterations);
   const Agreement a = ExpectAgreement(ref.result, fast.result, 0.01);
   EXPECT_GE(a.compared, 95);
@@ -154,11 +159,7 @@ TEST(SplineCalibrator, SpeedUpsKeepTheOutliersAndTheEstimates) {
 TEST(SplineCalibrator, SplitFrameRowsKeepTheOutliersAndTheEstimates) {
   const auto [whole, split] =
       CalibrateFastAndReference([](SplineCalibratorOptions* o) { o->split_frame_rows = 1; });
-  ASSERT_EQ(split.outliers.size(), whole.outliers.size());
-  for (std::size_t i = 0; i < whole.outliers.size(); ++i) {
-    EXPECT_EQ(split.outliers[i].corners, whole.outliers[i].corners) << whole.outliers[i].camera;
-    EXPECT_EQ(split.outliers[i].removed, whole.outliers[i].removed) << whole.outliers[i].camera;
-  }
+  ExpectSameOutliers(split, whole);
   EXPECT_EQ(split.iterations, whole.iterations);
   const Agreement a = ExpectAgreement(whole.result, split.result, 0.01);
   EXPECT_GE(a.compared, 95);
