@@ -269,8 +269,10 @@ class SplineProblem {
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     // With an evaluation callback Ceres writes every evaluation point into the parameter blocks'
     // memory before evaluating, which the split frames' intrinsic rows read their pose from
-    // (frame_corners_residual.h).
-    po.evaluation_callback = &point_in_memory_;
+    // (frame_corners_residual.h); without split frames nothing reads it, so Ceres need not copy.
+    const bool any_split = std::any_of(prep_.cameras.begin(), prep_.cameras.end(),
+                                       [&](const PreparedCamera& c) { return SplitsFrameRows(c); });
+    po.evaluation_callback = any_split ? &point_in_memory_ : nullptr;
     problem_ = std::make_unique<ceres::Problem>(po);
     kept_corners_.clear();
     inertial_ids_.clear();
@@ -617,14 +619,18 @@ class SplineProblem {
 
   // One compressed block per frame (frame_corners_residual.h); the robust stage's Huber weights
   // are applied per corner inside the block.
+  // The split halves only where the intrinsic rows have a free block (a block of constant
+  // blocks only would be evaluated once, at the start, as Ceres' fixed cost).
+  bool SplitsFrameRows(const PreparedCamera& cam) const {
+    const bool many =
+        static_cast<int>(cam.views.size()) > SplineCalibratorOptions::kSplitFrameRowsAbove;
+    return (options_.split_frame_rows > 0 || (options_.split_frame_rows < 0 && many)) &&
+           cam.state->config.Estimates(EstimateItem::kIntrinsics);
+  }
+
   void AddCameraFrames(PreparedCamera* cam, bool robust) {
     SensorState& s = *cam->state;
-    // The split halves only where the intrinsic rows have a free block (a block of constant
-    // blocks only would be evaluated once, at the start, as Ceres' fixed cost).
-    const bool many =
-        static_cast<int>(cam->views.size()) > SplineCalibratorOptions::kSplitFrameRowsAbove;
-    const bool split = (options_.split_frame_rows > 0 || (options_.split_frame_rows < 0 && many)) &&
-                       s.config.Estimates(EstimateItem::kIntrinsics);
+    const bool split = SplitsFrameRows(*cam);
     ForEachFrame(*cam, [&](std::size_t first, std::size_t last) {
       if (!AnyLeft(*cam, first, last))
         return;
