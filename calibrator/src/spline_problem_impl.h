@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/lm_solver.h"
 #include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
@@ -343,7 +344,17 @@ class SplineProblem {
           std::max(so.function_tolerance, options_.stop_cost_change / last_cost_);
     }
     ceres::Solver::Summary summary;
-    ceres::Solve(so, problem_.get(), &summary);
+    if (options_.lm_solver) {
+      // The estimated calibration blocks couple to nearly every residual: the dense border.
+      std::vector<double*> border;
+      for (const ParameterBlockInfo& b : blocks_) {
+        if (b.estimated)
+          border.push_back(b.values);
+      }
+      SolveLevenbergMarquardt(so, border, problem_.get(), &summary);
+    } else {
+      ceres::Solve(so, problem_.get(), &summary);
+    }
     last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +

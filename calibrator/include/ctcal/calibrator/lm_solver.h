@@ -1,0 +1,40 @@
+// Levenberg-Marquardt on a ceres::Problem with the normal equations assembled on several threads.
+//
+// Ceres 2.1's SPARSE_NORMAL_CHOLESKY forms J^T J on one thread (InnerProductComputer), redoes its
+// symbolic product at every Solve, and stores the whole Jacobian first (once more to append the LM
+// diagonal). The spline calibration's J^T J is a band (the trajectory knots) with a dense border
+// (the calibration blocks, coupled to every residual): here every residual block's J_b^T J_b and
+// J_b^T r_b go straight into a fixed pattern of that shape on `num_threads` threads (no Jacobian
+// is stored), and the step solves
+//
+//   [A_nn  H_nc] [d_n]   [-g_n]      A = H + diag(D) / radius,
+//   [H_cn  A_cc] [d_c] = [-g_c]      D = diag(H) clamped to [min_lm_diagonal, max_lm_diagonal]
+//
+// by the Schur complement on the border: A_nn = L L^T (CHOLMOD, its symbolic analysis once per
+// solve), S = A_cc - H_cn A_nn^-1 H_nc (dense, the border's size), d_c = S^-1 (-g_c + H_cn
+// A_nn^-1 g_n), d_n = -A_nn^-1 (g_n + H_nc d_c). The damping, step acceptance, trust-region update
+// and stop rules are Ceres' LEVENBERG_MARQUARDT ones without Jacobi scaling (so Ceres and this
+// solver take the same steps up to rounding), on the problem's own residual blocks, manifolds
+// (the Jacobians lifted by Manifold::PlusJacobian, steps applied by Manifold::Plus), parameter
+// bounds (projected after Plus, as Ceres' ParameterBlock::Plus does) and loss functions (Triggs'
+// correction, as Ceres' Corrector). The values live in the parameter blocks' memory throughout,
+// the iteration callbacks see Ceres' IterationSummary.
+#pragma once
+
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+
+#include <vector>
+
+namespace ctcal {
+
+// Solves `problem` as ceres::Solve would with `options` (TRUST_REGION, LEVENBERG_MARQUARDT,
+// jacobi_scaling = false; the linear solver settings are ignored), the parameter blocks `border`
+// (those of the problem among them, free ones only) as the dense border of the normal equations.
+// Fills the summary's costs, iterations, termination type, message, counts and times. Throws
+// std::invalid_argument for options it does not implement.
+void SolveLevenbergMarquardt(const ceres::Solver::Options& options,
+                             const std::vector<double*>& border, ceres::Problem* problem,
+                             ceres::Solver::Summary* summary);
+
+}  // namespace ctcal
