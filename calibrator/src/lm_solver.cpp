@@ -89,10 +89,12 @@ void ApplyLoss(const ceres::LossFunction& loss, int rows, double* r, RowMatrix* 
   res *= scaling;
 }
 
-class LmSolver {
+}  // namespace
+
+class LevenbergMarquardt::Impl {
  public:
-  LmSolver(const ceres::Solver::Options& options, const std::vector<double*>& border,
-           ceres::Problem* problem)
+  Impl(const ceres::Solver::Options& options, const std::vector<double*>& border,
+       ceres::Problem* problem)
       : o_(options), problem_(*problem) {
     if (o_.minimizer_type != ceres::TRUST_REGION ||
         o_.trust_region_strategy_type != ceres::LEVENBERG_MARQUARDT)
@@ -108,6 +110,8 @@ class LmSolver {
   }
 
   void Solve(ceres::Solver::Summary* summary);
+  const std::vector<double*>& Border() const { return border_; }
+  MarginalInformation MarginalizeToBorder();
 
  private:
   void Setup(const std::vector<double*>& border);
@@ -119,7 +123,7 @@ class LmSolver {
   void GradientNorms(ceres::IterationSummary* it);
   bool SolveStep(double radius, Eigen::VectorXd* step);
 
-  const ceres::Solver::Options& o_;
+  const ceres::Solver::Options o_;  // a copy: the solver outlives the caller's options
   ceres::Problem& problem_;
   int threads_ = 1;
   std::vector<Column> columns_;
@@ -131,11 +135,12 @@ class LmSolver {
   Eigen::VectorXd g_;  // J^T r at the current point
   double fixed_cost_ = 0.0;
   int num_residuals_ = 0;
-  Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower> llt_;
-  bool analyzed_ = false;
+  std::unique_ptr<Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower>> llt_;
+  std::vector<double*> border_;
+  bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
 };
 
-void LmSolver::Setup(const std::vector<double*>& border) {
+void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
   std::vector<ceres::ResidualBlockId> ids;
   problem_.GetResidualBlocks(&ids);
   std::unordered_map<const double*, int> column_of;
@@ -185,8 +190,10 @@ void LmSolver::Setup(const std::vector<double*>& border) {
   }
   const int nuisance = static_cast<int>(columns_.size());
   for (double* p : border) {
-    if (is_border.count(p) && !column_of.count(p))
+    if (is_border.count(p) && !column_of.count(p)) {
       add_column(p);
+      border_.push_back(p);
+    }
   }
   offset_.assign(columns_.size() + 1, 0);
   std::vector<int> tangent;
@@ -237,7 +244,8 @@ void LmSolver::Setup(const std::vector<double*>& border) {
   g_.resize(H_->n() + H_->c());
 }
 
-bool LmSolver::EvaluateBlock(const Block& b, bool jacobian, Scratch* s, double* cost) const {
+bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scratch* s,
+                                             double* cost) const {
   s->r.resize(static_cast<std::size_t>(b.rows));
   const std::size_t np = b.params.size();
   if (jacobian) {
@@ -285,7 +293,7 @@ bool LmSolver::EvaluateBlock(const Block& b, bool jacobian, Scratch* s, double* 
 // `jacobian`, H = J^T J and g = J^T r there. Thread t takes the chunks t, t + T, t + 2T, ... of
 // kChunk residual blocks into its own partial sums (the sensors' blocks mixed on every thread),
 // added in thread order: the same sums for the same thread count, whatever the schedule.
-bool LmSolver::Evaluate(bool jacobian, double* cost) {
+bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   constexpr std::size_t kChunk = 64;
   const std::size_t T = static_cast<std::size_t>(threads_);
   std::vector<double> costs(T, 0.0);
@@ -338,14 +346,14 @@ bool LmSolver::Evaluate(bool jacobian, double* cost) {
   return true;
 }
 
-void LmSolver::Store(const Eigen::VectorXd& x) {
+void LevenbergMarquardt::Impl::Store(const Eigen::VectorXd& x) {
   for (std::size_t k = 0; k < columns_.size(); ++k)
     std::copy(x.data() + offset_[k], x.data() + offset_[k + 1], columns_[k].values);
 }
 
 // x [+] delta block by block, projected on the bounds (Ceres' ParameterBlock::Plus).
-bool LmSolver::Plus(const Eigen::VectorXd& x, const Eigen::VectorXd& delta,
-                    Eigen::VectorXd* out) const {
+bool LevenbergMarquardt::Impl::Plus(const Eigen::VectorXd& x, const Eigen::VectorXd& delta,
+                                    Eigen::VectorXd* out) const {
   out->resize(x.size());
   for (std::size_t k = 0; k < columns_.size(); ++k) {
     const Column& c = columns_[k];
@@ -365,7 +373,7 @@ bool LmSolver::Plus(const Eigen::VectorXd& x, const Eigen::VectorXd& delta,
   return true;
 }
 
-bool LmSolver::UpdatePlusJacobians() {
+bool LevenbergMarquardt::Impl::UpdatePlusJacobians() {
   for (Column& c : columns_) {
     if (c.manifold == nullptr)
       continue;
@@ -377,7 +385,7 @@ bool LmSolver::UpdatePlusJacobians() {
 }
 
 // Ceres' gradient norms: of x - Plus(x, -g) (the projected gradient), at the current point.
-void LmSolver::GradientNorms(ceres::IterationSummary* it) {
+void LevenbergMarquardt::Impl::GradientNorms(ceres::IterationSummary* it) {
   Eigen::VectorXd x(offset_.back()), y;
   for (std::size_t k = 0; k < columns_.size(); ++k)
     std::copy(columns_[k].values, columns_[k].values + columns_[k].ambient, x.data() + offset_[k]);
@@ -390,7 +398,7 @@ void LmSolver::GradientNorms(ceres::IterationSummary* it) {
 }
 
 // The damped step (the header's Schur complement). False when a factorisation fails.
-bool LmSolver::SolveStep(double radius, Eigen::VectorXd* step) {
+bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   const int n = H_->n(), c = H_->c();
   Eigen::VectorXd D = H_->Diagonal().cwiseMax(o_.min_lm_diagonal).cwiseMin(o_.max_lm_diagonal);
   D /= radius;
@@ -400,19 +408,20 @@ bool LmSolver::SolveStep(double radius, Eigen::VectorXd* step) {
     NormalEquations::SparseColMajor A = H_->H_nn();
     for (int i = 0; i < n; ++i)
       A.valuePtr()[A.outerIndexPtr()[i]] += D(i);  // the diagonal leads its column
-    if (!analyzed_) {
-      llt_.cholmod().print = 0;  // a failure is an invalid step, handled by the caller
-      llt_.analyzePattern(A);
-      analyzed_ = true;
+    if (llt_ == nullptr) {
+      llt_ = std::make_unique<
+          Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower>>();
+      llt_->cholmod().print = 0;  // a failure is an invalid step, handled by the caller
+      llt_->analyzePattern(A);
     }
-    llt_.factorize(A);
-    if (llt_.info() != Eigen::Success)
+    llt_->factorize(A);
+    if (llt_->info() != Eigen::Success)
       return false;
     Eigen::MatrixXd B(n, c + 1);
     B.leftCols(c) = H_->H_nc();
     B.col(c) = g_.head(n);
-    Y = llt_.solve(B);
-    if (llt_.info() != Eigen::Success || !Y.allFinite())
+    Y = llt_->solve(B);
+    if (llt_->info() != Eigen::Success || !Y.allFinite())
       return false;
   }
   if (c > 0) {
@@ -436,7 +445,7 @@ bool LmSolver::SolveStep(double radius, Eigen::VectorXd* step) {
   return step->allFinite();
 }
 
-void LmSolver::Solve(ceres::Solver::Summary* summary) {
+void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
   const auto t_start = Clock::now();
   ceres::Solver::Summary& S = *summary;
   S = ceres::Solver::Summary();
@@ -462,6 +471,11 @@ void LmSolver::Solve(ceres::Solver::Summary* summary) {
   S.num_parameters = S.num_parameters_reduced = offset_.back();
   S.num_effective_parameters = S.num_effective_parameters_reduced = H_->n() + H_->c();
   const auto finish = [&](ceres::TerminationType type, const std::string& message, double x_cost) {
+    // Only the normal equations at the final point outlive the solve (MarginalizeToBorder).
+    final_point_ = type != ceres::FAILURE;
+    partial_H_.clear();
+    scratch_.clear();
+    llt_.reset();
     S.termination_type = type;
     S.message = message;
     S.final_cost = x_cost + fixed_cost_;
@@ -620,12 +634,34 @@ void LmSolver::Solve(ceres::Solver::Summary* summary) {
   }
 }
 
-}  // namespace
+MarginalInformation LevenbergMarquardt::Impl::MarginalizeToBorder() {
+  if (!final_point_ || H_ == nullptr)
+    throw std::logic_error("MarginalizeToBorder: no normal equations at a solve's final point");
+  MarginalInformation out;
+  out.nuisance_dimension = H_->n();
+  out.information = MarginalizeNuisance(H_.get(), &out.nuisance_damping);
+  H_.reset();
+  return out;
+}
+
+LevenbergMarquardt::LevenbergMarquardt(const ceres::Solver::Options& options,
+                                       const std::vector<double*>& border, ceres::Problem* problem)
+    : impl_(std::make_unique<Impl>(options, border, problem)) {}
+LevenbergMarquardt::~LevenbergMarquardt() = default;
+void LevenbergMarquardt::Solve(ceres::Solver::Summary* summary) {
+  impl_->Solve(summary);
+}
+const std::vector<double*>& LevenbergMarquardt::Border() const {
+  return impl_->Border();
+}
+MarginalInformation LevenbergMarquardt::MarginalizeToBorder() {
+  return impl_->MarginalizeToBorder();
+}
 
 void SolveLevenbergMarquardt(const ceres::Solver::Options& options,
                              const std::vector<double*>& border, ceres::Problem* problem,
                              ceres::Solver::Summary* summary) {
-  LmSolver(options, border, problem).Solve(summary);
+  LevenbergMarquardt(options, border, problem).Solve(summary);
 }
 
 }  // namespace ctcal

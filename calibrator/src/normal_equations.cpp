@@ -1,6 +1,8 @@
 #include "normal_equations.h"
 
+#include <Eigen/CholmodSupport>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
@@ -77,6 +79,16 @@ void NormalEquations::SetZero() {
   std::fill(H_nn_.valuePtr(), H_nn_.valuePtr() + H_nn_.nonZeros(), 0.0);
   H_nc_.setZero();
   H_cc_.setZero();
+}
+
+void NormalEquations::Release() {
+  H_nn_ = SparseColMajor();
+  H_nc_ = Eigen::MatrixXd();
+  H_cc_ = Eigen::MatrixXd();
+  below_ = {};
+  below_start_ = {};
+  block_of_col_ = {};
+  G_ = Eigen::MatrixXd();
 }
 
 void NormalEquations::AddValues(const NormalEquations& other) {
@@ -194,6 +206,81 @@ void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<
       }
     }
   }
+}
+
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping) {
+  using SparseColMajor = NormalEquations::SparseColMajor;
+  const int n = normal->n(), c = normal->c();
+  *nuisance_damping = 0.0;
+  const Eigen::MatrixXd H_cc = normal->H_cc();
+  if (n == 0)
+    return H_cc;
+  // A nuisance state no residual touches (a trajectory or bias knot beyond the samples the data
+  // selection kept) has a zero diagonal, hence (H is PSD) a zero row and column: it carries no
+  // information and couples to nothing, so it is left out exactly instead of being damped.
+  SparseColMajor H_nn;
+  Eigen::MatrixXd H_nc;
+  {
+    SparseColMajor& L = normal->H_nn();
+    std::vector<int> keep(static_cast<std::size_t>(n), -1);
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      if (L.valuePtr()[L.outerIndexPtr()[i]] > 0.0)  // the diagonal leads its column
+        keep[static_cast<std::size_t>(i)] = m++;
+    }
+    if (m == n) {
+      // Every state touched (the usual case): no copy.
+      H_nn.swap(L);
+      H_nc.swap(normal->H_nc());
+    } else {
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int j = 0; j < n; ++j) {
+        if (keep[static_cast<std::size_t>(j)] < 0)
+          continue;
+        for (SparseColMajor::InnerIterator it(L, j); it; ++it) {
+          if (keep[static_cast<std::size_t>(it.row())] >= 0)
+            entries.emplace_back(keep[static_cast<std::size_t>(it.row())],
+                                 keep[static_cast<std::size_t>(j)], it.value());
+        }
+      }
+      H_nn.resize(m, m);
+      H_nn.setFromTriplets(entries.begin(), entries.end());
+      H_nc.resize(m, c);
+      for (int i = 0; i < n; ++i) {
+        if (keep[static_cast<std::size_t>(i)] >= 0)
+          H_nc.row(keep[static_cast<std::size_t>(i)]) = normal->H_nc().row(i);
+      }
+    }
+    normal->Release();
+  }
+  const int m = static_cast<int>(H_nn.rows());
+
+  // A combination of touched nuisance states the data do not determine makes H_nn singular;
+  // damping it by a tiny fraction of its scale marginalises it with a flat prior instead of
+  // failing, and the amount is reported. Only H_nn's lower triangle is stored (and read).
+  double max_diag = 0.0;
+  for (int i = 0; i < m; ++i)
+    max_diag = std::max(max_diag, H_nn.valuePtr()[H_nn.outerIndexPtr()[i]]);
+  Eigen::CholmodSupernodalLLT<SparseColMajor, Eigen::Lower> llt;
+  // A failed attempt is handled (and reported) by the damping below; CHOLMOD's own message would
+  // only repeat it without context, so it stays silent (print level 0) and info() is checked.
+  llt.cholmod().print = 0;
+  llt.compute(H_nn);
+  for (const double relative : {1e-12, 1e-9, 1e-6}) {
+    if (llt.info() == Eigen::Success)
+      break;
+    SparseColMajor damped = H_nn;
+    for (int i = 0; i < m; ++i)
+      damped.valuePtr()[damped.outerIndexPtr()[i]] += relative * std::max(max_diag, 1.0);
+    llt.compute(damped);
+    *nuisance_damping = relative;
+  }
+  if (llt.info() != Eigen::Success)
+    throw std::runtime_error("covariance: the nuisance information cannot be factored");
+  H_nn = SparseColMajor();  // the factor holds what the solve needs
+  const Eigen::MatrixXd X = llt.solve(H_nc);
+  Eigen::MatrixXd information = H_cc - H_nc.transpose() * X;
+  return 0.5 * (information + information.transpose()).eval();
 }
 
 }  // namespace ctcal

@@ -65,6 +65,8 @@ class NormalEquations {
   Eigen::MatrixXd& H_nc() { return H_nc_; }
   const Eigen::MatrixXd& H_nc() const { return H_nc_; }
   const Eigen::MatrixXd& H_cc() const { return H_cc_; }
+  // Frees the values and the pattern (MarginalizeNuisance, once it has taken them over).
+  void Release();
 
  private:
   std::vector<int> tangent_;
@@ -81,5 +83,12 @@ class NormalEquations {
   std::vector<Run> runs_;  // scratch of Add
   Eigen::MatrixXd G_;      // scratch of AddBlock
 };
+
+// The border's information with the nuisance states marginalised, H_cc - H_cn H_nn^-1 H_nc (H_nn
+// factored by CHOLMOD). A nuisance state no residual touches (zero diagonal) is left out exactly;
+// a singular H_nn is damped by 1e-12, 1e-9 or 1e-6 of its largest diagonal, the amount returned
+// in *nuisance_damping (0 when none was needed). Takes H's values over (H is released). Throws
+// std::runtime_error when H_nn cannot be factored even damped.
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping);
 
 }  // namespace ctcal

@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -137,12 +138,21 @@ std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
 void LogOutliers(const std::vector<CameraOutliers>& outliers, double outlier_probability,
                  const CalibrationLog& log);
 
+// The information of `blocks` with every other free block marginalised, of all residual blocks
+// (priors included), from the last solve (LevenbergMarquardt::MarginalizeToBorder).
+struct SolvedInformation {
+  std::vector<double*> blocks;
+  MarginalInformation information;
+};
+
+// `solved`: the covariance's information when the solver has it for exactly the estimated
+// calibration blocks; else (nullptr) it is computed from the problem.
 void FinishResult(ceres::Problem& problem, CalibrationState& state,
                   const std::vector<ceres::ResidualBlockId>& prior_ids,
                   const std::vector<CornerResiduals>& corners,
                   const std::vector<InertialResidualSums>& inertial,
                   const SplineCalibratorOptions& options, const CalibrationLog& log,
-                  SplineCalibrationResult* out);
+                  SplineCalibrationResult* out, const SolvedInformation* solved = nullptr);
 
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback);
@@ -274,6 +284,7 @@ class SplineProblem {
     const bool any_split = std::any_of(prep_.cameras.begin(), prep_.cameras.end(),
                                        [&](const PreparedCamera& c) { return SplitsFrameRows(c); });
     po.evaluation_callback = any_split ? &point_in_memory_ : nullptr;
+    solver_.reset();  // it reads the old problem
     problem_ = std::make_unique<ceres::Problem>(po);
     kept_corners_.clear();
     inertial_ids_.clear();
@@ -344,14 +355,17 @@ class SplineProblem {
           std::max(so.function_tolerance, options_.stop_cost_change / last_cost_);
     }
     ceres::Solver::Summary summary;
+    solver_.reset();
     if (options_.lm_solver) {
-      // The estimated calibration blocks couple to nearly every residual: the dense border.
+      // The estimated calibration blocks couple to nearly every residual: the dense border. The
+      // solver stays for the covariance (Finish), which needs H at the last solve's final point.
       std::vector<double*> border;
       for (const ParameterBlockInfo& b : blocks_) {
         if (b.estimated)
           border.push_back(b.values);
       }
-      SolveLevenbergMarquardt(so, border, problem_.get(), &summary);
+      solver_ = std::make_unique<LevenbergMarquardt>(so, border, problem_.get());
+      solver_->Solve(&summary);
     } else {
       ceres::Solve(so, problem_.get(), &summary);
     }
@@ -497,7 +511,16 @@ class SplineProblem {
       });
       inertial.push_back(sums);
     }
-    FinishResult(*problem_, state_, prior_ids_, corners, inertial, options_, log_, out);
+    // The covariance from the last solve's normal equations at its final point, where it has them.
+    std::optional<SolvedInformation> solved;
+    if (solver_ != nullptr) {
+      solved.emplace();
+      solved->blocks = solver_->Border();
+      solved->information = solver_->MarginalizeToBorder();
+      solver_.reset();
+    }
+    FinishResult(*problem_, state_, prior_ids_, corners, inertial, options_, log_, out,
+                 solved ? &*solved : nullptr);
   }
 
   // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
@@ -511,7 +534,10 @@ class SplineProblem {
 
   ceres::Problem& problem() { return *problem_; }
   // Destroys the problem (its residual blocks); the values stay in the spline and the state.
-  void ReleaseProblem() { problem_.reset(); }
+  void ReleaseProblem() {
+    solver_.reset();
+    problem_.reset();
+  }
 
   // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
   Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
@@ -940,6 +966,7 @@ class SplineProblem {
   CalibrationLog log_;
   Spline spline_;
   std::unique_ptr<ceres::Problem> problem_;
+  std::unique_ptr<LevenbergMarquardt> solver_;  // of the last solve (lm_solver)
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;

@@ -251,5 +251,31 @@ TEST(LmSolver, CallbackEndsTheSolveAtTheCurrentPoint) {
   EXPECT_NEAR(cost, summary.final_cost, 1e-12 * cost);
 }
 
+// The border's information at the final point from the solver's last normal equations equals
+// ComputeMarginalInformation's from a fresh pass over the Jacobian there (the covariance).
+TEST(LmSolver, BorderInformationIsTheMarginalInformationAtTheSolution) {
+  TestProblem t;
+  MakeProblem(&t, true);
+  LevenbergMarquardt lm(Options(2), t.Border(), t.problem.get());
+  EXPECT_THROW(lm.MarginalizeToBorder(), std::logic_error);
+  ceres::Solver::Summary summary;
+  lm.Solve(&summary);
+  ASSERT_EQ(summary.termination_type, ceres::CONVERGENCE);
+  ASSERT_EQ(lm.Border(), t.Border());
+  const MarginalInformation solved = lm.MarginalizeToBorder();
+  const MarginalInformation fresh = ComputeMarginalInformation(
+      *t.problem, {{t.q_c.coeffs().data(), {"q0", "q1", "q2"}, {1, 1, 1}},
+                   {t.t_c.data(), {"t0", "t1", "t2"}, {1, 1, 1}},
+                   {&t.s, {"s"}, {1}}});
+  ASSERT_EQ(solved.information.rows(), 7);
+  EXPECT_EQ(solved.nuisance_dimension, fresh.nuisance_dimension);
+  EXPECT_EQ(solved.nuisance_damping, 0.0);
+  const double scale = fresh.information.cwiseAbs().maxCoeff();
+  EXPECT_LT((solved.information - fresh.information).cwiseAbs().maxCoeff(), 1e-10 * scale)
+      << solved.information << "\n\n"
+      << fresh.information;
+  EXPECT_THROW(lm.MarginalizeToBorder(), std::logic_error);  // taken over once
+}
+
 }  // namespace
 }  // namespace ctcal

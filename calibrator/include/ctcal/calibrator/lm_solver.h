@@ -24,9 +24,43 @@
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 
+#include <memory>
 #include <vector>
 
+#include "ctcal/calibrator/marginal_covariance.h"
+
 namespace ctcal {
+
+// One solve, and then the border's marginal information at its final point (the covariance's, from
+// the normal equations the last iteration assembled instead of another pass over the Jacobian).
+class LevenbergMarquardt {
+ public:
+  // The problem's structure is read here: it must not change until the solver is destroyed.
+  LevenbergMarquardt(const ceres::Solver::Options& options, const std::vector<double*>& border,
+                     ceres::Problem* problem);
+  ~LevenbergMarquardt();
+  LevenbergMarquardt(const LevenbergMarquardt&) = delete;
+  LevenbergMarquardt& operator=(const LevenbergMarquardt&) = delete;
+
+  // As SolveLevenbergMarquardt. Afterwards only the normal equations at the final point are kept.
+  void Solve(ceres::Solver::Summary* summary);
+
+  // The border blocks the normal equations hold: those of `border` that are free and read by a
+  // residual block, in its order.
+  const std::vector<double*>& Border() const;
+
+  // After Solve: the information of the Border() blocks at the final point with every other free
+  // block marginalised, H_cc - H_cn H_nn^-1 H_nc of H = J^T J of every residual block (priors
+  // included), as ComputeMarginalInformation computes it (information, nuisance_dimension,
+  // nuisance_damping; names and units are the caller's). Once: it takes the normal equations over.
+  // Throws std::logic_error before Solve, std::runtime_error when H_nn cannot be factored.
+  MarginalInformation MarginalizeToBorder();
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
 
 // Solves `problem` as ceres::Solve would with `options` (TRUST_REGION, LEVENBERG_MARQUARDT,
 // jacobi_scaling = false; the linear solver settings are ignored), the parameter blocks `border`
