@@ -50,10 +50,12 @@ struct Block {
   int cols = 0;  // tangent columns of the free blocks
 };
 
-// One thread's evaluation buffers.
+// One thread's evaluation buffers, Eigen's (aligned): Eigen's vectorised sums peel their first
+// elements by the address' alignment, so malloc's 16-byte alignment would make the last bits
+// depend on where the heap put a buffer, and two runs differ.
 struct Scratch {
-  std::vector<double> r;
-  std::vector<std::vector<double>> ambient;  // per parameter block, rows x ambient
+  Eigen::VectorXd r;
+  std::vector<Eigen::VectorXd> ambient;  // per parameter block, rows x ambient
   std::vector<double*> jacobians;
   RowMatrix J;  // rows x cols, tangent
 };
@@ -112,6 +114,14 @@ class LevenbergMarquardt::Impl {
   void Solve(ceres::Solver::Summary* summary);
   const std::vector<double*>& Border() const { return border_; }
   MarginalInformation MarginalizeToBorder();
+  std::size_t NormalEquationsBytes() const {
+    const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
+    const std::size_t h =
+        static_cast<std::size_t>(H_->H_nn().nonZeros()) * 12 + (n * c + c * c) * 8;
+    // H on every thread, and the step's [H_nc g_n] and A_nn^-1 [H_nc g_n].
+    return h * static_cast<std::size_t>(threads_) + 2 * n * (c + 1) * 8;
+  }
+  std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
 
  private:
   void Setup(const std::vector<double*>& border);
@@ -135,6 +145,7 @@ class LevenbergMarquardt::Impl {
   Eigen::VectorXd g_;  // J^T r at the current point
   double fixed_cost_ = 0.0;
   int num_residuals_ = 0;
+  std::size_t jacobian_values_ = 0;  // rows x tangent columns over the residual blocks
   std::unique_ptr<Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower>> llt_;
   std::vector<double*> border_;
   bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
@@ -232,6 +243,7 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
       continue;
     }
     num_residuals_ += b.rows;
+    jacobian_values_ += static_cast<std::size_t>(b.rows) * static_cast<std::size_t>(b.cols);
     blocks_of.push_back(std::move(cols));
     blocks_.push_back(std::move(b));
   }
@@ -246,7 +258,7 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
 
 bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scratch* s,
                                              double* cost) const {
-  s->r.resize(static_cast<std::size_t>(b.rows));
+  s->r.resize(b.rows);
   const std::size_t np = b.params.size();
   if (jacobian) {
     s->ambient.resize(std::max(s->ambient.size(), np));
@@ -255,7 +267,7 @@ bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scra
       if (b.column[i] < 0)
         continue;
       const Column& c = columns_[static_cast<std::size_t>(b.column[i])];
-      s->ambient[i].resize(static_cast<std::size_t>(b.rows * c.ambient));
+      s->ambient[i].resize(b.rows * c.ambient);
       s->jacobians[i] = s->ambient[i].data();
     }
   }
@@ -470,9 +482,13 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
   S.num_parameter_blocks_reduced = S.num_parameter_blocks;
   S.num_parameters = S.num_parameters_reduced = offset_.back();
   S.num_effective_parameters = S.num_effective_parameters_reduced = H_->n() + H_->c();
+  // Whether H_ and g_ are at x: after an accepted step they are evaluated lazily, at the start of
+  // the next iteration, so that a solve a callback or the iteration limit ends right after the
+  // step does not assemble them for nothing (the robust solve's RobustStageStop: one J^T J less).
+  bool jacobian_at_x = true;
   const auto finish = [&](ceres::TerminationType type, const std::string& message, double x_cost) {
     // Only the normal equations at the final point outlive the solve (MarginalizeToBorder).
-    final_point_ = type != ceres::FAILURE;
+    final_point_ = type != ceres::FAILURE && jacobian_at_x;
     partial_H_.clear();
     scratch_.clear();
     llt_.reset();
@@ -534,7 +550,7 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
       finish(ceres::NO_CONVERGENCE, "Maximum number of iterations reached.", x_cost);
       return false;
     }
-    if (it.step_is_successful && it.gradient_max_norm <= o_.gradient_tolerance) {
+    if (jacobian_at_x && it.step_is_successful && it.gradient_max_norm <= o_.gradient_tolerance) {
       finish(ceres::CONVERGENCE, "Gradient tolerance reached.", x_cost);
       return false;
     }
@@ -556,6 +572,18 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     it.iteration = previous.iteration + 1;
     it.gradient_max_norm = previous.gradient_max_norm;
     it.gradient_norm = previous.gradient_norm;
+    if (!jacobian_at_x) {
+      if (!evaluate_jacobian()) {
+        finish(ceres::FAILURE, "Residual and Jacobian evaluation failed.", x_cost);
+        return;
+      }
+      jacobian_at_x = true;
+      GradientNorms(&it);
+      if (it.gradient_max_norm <= o_.gradient_tolerance) {
+        finish(ceres::CONVERGENCE, "Gradient tolerance reached.", x_cost);
+        return;
+      }
+    }
     const auto t_linear = Clock::now();
     bool valid = SolveStep(radius, &step);
     ++S.num_linear_solves;
@@ -613,13 +641,11 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     }
     it.relative_decrease = it.cost_change / model_cost_change;
     if (it.relative_decrease > o_.min_relative_decrease) {
+      // The callbacks see the gradient norms of the point before the step (lazy H, above).
       x.swap(candidate);
-      if (!evaluate_jacobian()) {
-        finish(ceres::FAILURE, "Residual and Jacobian evaluation failed.", x_cost);
-        return;
-      }
+      x_cost = candidate_cost;
+      jacobian_at_x = false;
       it.step_is_successful = true;
-      GradientNorms(&it);
       radius = std::min(
           o_.max_trust_region_radius,
           radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * it.relative_decrease - 1.0, 3)));
@@ -653,6 +679,12 @@ void LevenbergMarquardt::Solve(ceres::Solver::Summary* summary) {
 }
 const std::vector<double*>& LevenbergMarquardt::Border() const {
   return impl_->Border();
+}
+std::size_t LevenbergMarquardt::NormalEquationsBytes() const {
+  return impl_->NormalEquationsBytes();
+}
+std::size_t LevenbergMarquardt::JacobianBytes() const {
+  return impl_->JacobianBytes();
 }
 MarginalInformation LevenbergMarquardt::MarginalizeToBorder() {
   return impl_->MarginalizeToBorder();

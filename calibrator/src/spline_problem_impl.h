@@ -365,10 +365,23 @@ class SplineProblem {
           border.push_back(b.values);
       }
       solver_ = std::make_unique<LevenbergMarquardt>(so, border, problem_.get());
-      solver_->Solve(&summary);
-    } else {
-      ceres::Solve(so, problem_.get(), &summary);
+      // Long recordings' compressed inertial blocks span many knots: their band (on both threads)
+      // would hold more than Ceres' Jacobian and J^T J together (10 min at 1 kHz: +76 MB), so
+      // they stay with Ceres (docs/performance.md step 7f).
+      const bool ceres_solves = solver_->NormalEquationsBytes() > solver_->JacobianBytes() / 2;
+      char line[160];
+      std::snprintf(line, sizeof line, "    normal equations %.0f MB, Jacobian %.0f MB: %s",
+                    1e-6 * static_cast<double>(solver_->NormalEquationsBytes()),
+                    1e-6 * static_cast<double>(solver_->JacobianBytes()),
+                    ceres_solves ? "Ceres solves" : "own Levenberg-Marquardt");
+      log_(line);
+      if (ceres_solves)
+        solver_.reset();
     }
+    if (solver_ != nullptr)
+      solver_->Solve(&summary);
+    else
+      ceres::Solve(so, problem_.get(), &summary);
     last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +

@@ -18,12 +18,15 @@
 // (the Jacobians lifted by Manifold::PlusJacobian, steps applied by Manifold::Plus), parameter
 // bounds (projected after Plus, as Ceres' ParameterBlock::Plus does) and loss functions (Triggs'
 // correction, as Ceres' Corrector). The values live in the parameter blocks' memory throughout,
-// the iteration callbacks see Ceres' IterationSummary.
+// the iteration callbacks see Ceres' IterationSummary (its gradient norms, unlike Ceres', of the
+// point before an accepted step: J^T J is assembled at the start of the next iteration, none when
+// a callback or the iteration limit ends the solve after the step).
 #pragma once
 
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -49,7 +52,15 @@ class LevenbergMarquardt {
   // residual block, in its order.
   const std::vector<double*>& Border() const;
 
-  // After Solve: the information of the Border() blocks at the final point with every other free
+  // What the solver holds for its normal equations (H on every thread and the step's dense
+  // border columns), and what a Jacobian of the problem's residual blocks holds (Ceres stores one;
+  // this solver does not): for a caller choosing the solver by memory.
+  std::size_t NormalEquationsBytes() const;
+  std::size_t JacobianBytes() const;
+
+  // After Solve (one that ended by a tolerance, not by a callback or the iteration limit right
+  // after a step: the normal equations there were never assembled): the information of the
+  // Border() blocks at the final point with every other free
   // block marginalised, H_cc - H_cn H_nn^-1 H_nc of H = J^T J of every residual block (priors
   // included), as ComputeMarginalInformation computes it (information, nuisance_dimension,
   // nuisance_damping; names and units are the caller's). Once: it takes the normal equations over.
