@@ -179,7 +179,7 @@ TEST(NumberFormat, ShortestExactWithADotAndYamlNonFinites) {
   EXPECT_TRUE(ParseDouble(".Inf", &y) && std::isinf(y) && y > 0);
   EXPECT_TRUE(ParseDouble("-.INF", &y) && std::isinf(y) && y < 0);
   EXPECT_TRUE(ParseDouble("+1.5e3", &y) && y == 1500.0);
-  for (const char* bad : {"", "1.2.3", "1e", "abc", "1,5", " 1", "1e999"})
+  for (const char* bad : {"", "1.2.3", "1e", "abc", "1,5", " 1", "1e999", "+-1", "+", "+-.inf"})
     EXPECT_FALSE(ParseDouble(bad, &y)) << bad;
 }
 
