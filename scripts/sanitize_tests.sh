@@ -17,6 +17,7 @@ build=${1:-$root/build-asan}
 pick=${2:-.}
 filter=${3:-*}
 jobs=${CTCAL_SANITIZE_JOBS:-2}
+limit=${CTCAL_SANITIZE_TIMEOUT:-3600}  # seconds per executable (exit code 124 when exceeded)
 
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g1" \
@@ -40,7 +41,7 @@ mkdir -p "$logs"
 failed=()
 for t in $targets; do
   start=$(date +%s)
-  nice -n 10 "$build/tests/$t" --gtest_filter="$filter" >"$logs/$t.log" 2>&1
+  nice -n 10 timeout "$limit" "$build/tests/$t" --gtest_filter="$filter" >"$logs/$t.log" 2>&1
   rc=$?
   secs=$(($(date +%s) - start))
   summary=$(grep -E '^\[  (PASSED|FAILED|SKIPPED) ' "$logs/$t.log" | tr '\n' ' ')
