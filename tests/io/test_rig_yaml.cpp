@@ -111,7 +111,7 @@ RigConfig RandomResult(std::uint64_t seed) {
   gyro.type = SensorType::kGyro;
   gyro.gyro_model = GyroModel::kFull;
   gyro.D_w = RandomVector(rng, 9);
-  gyro.noise = imu0.noise;
+  gyro.noise = rig.sensors[0].noise;  // imu0 dangles: the push_backs above reallocated
   gyro.noise.accelerometer_noise_density = 0.0;
   gyro.noise.accelerometer_random_walk = 0.0;
   gyro.T_B_S = RandomPose(rng);
