@@ -21,6 +21,7 @@
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/report_data_builder.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -149,6 +150,10 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
                                      const std::map<std::string, SensorData>& data,
                                      const CameraOnlyOptions& options, std::ostream& log) {
   const auto wall_start = std::chrono::steady_clock::now();
+  report::StageClock clock;  // the log's `time:` line of the stages
+  const int threads = options.num_threads > 0
+                          ? options.num_threads
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (!rig.IsCameraOnly())
     throw std::runtime_error("camera-only calibration: the rig has an inertial sensor");
   ValidateRig(rig, "camera-only calibration");
@@ -199,8 +204,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     bool reinit = false;
     if (cam->config->Estimates(EstimateItem::kIntrinsics)) {
       try {
-        const BoardPosesResult guess = InitBoardPoses(name, cam->model, board, corners,
-                                                      options.min_corners, options.min_views, {});
+        const BoardPosesResult guess = InitBoardPoses(
+            name, cam->model, board, corners, options.min_corners, options.min_views, {}, threads);
         const double rms_px = guess.median_rms_ray * cam->model.params()(focal_index);
         reinit = rms_px > options.reinit_rms_px;
         log << "[camera-only] " << name << ": the guessed intrinsics reproject at " << rms_px
@@ -219,7 +224,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       cam->report.intrinsics_reinitialised = true;
     }
     cam->views = InitBoardPoses(name, cam->model, board, corners, options.min_corners,
-                                options.min_views, init_log)
+                                options.min_views, init_log, threads)
                      .views;
     cam->report.view_spread_deg = ViewSpreadDeg(cam->views);
   }
@@ -455,9 +460,6 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
-  const int threads = options.num_threads > 0
-                          ? options.num_threads
-                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   solver_options.num_threads = threads;
   solver_options.function_tolerance = 1e-10;
   solver_options.parameter_tolerance = 1e-10;
@@ -476,6 +478,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     return summary.final_cost;
   };
 
+  std::vector<report::StageTime> stages{clock.Lap("initialisation")};
   {
     std::vector<CornerMeasurement> measurements;
     ceres::Problem robust(problem_options);
@@ -515,6 +518,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   ceres::Problem problem(problem_options);
   build(problem, false, &measurements);
   const double final_cost = solve(problem, "final");
+  stages.push_back(clock.Lap("solves"));
 
   // Residuals per camera, raw px and whitened; the report's corner rows (report_data.h): the
   // model at the final values, outliers included.
@@ -544,6 +548,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     row.outlier = !t.inlier;
     rows.push_back(row);
   }
+
+  stages.push_back(clock.Lap("residuals"));
 
   // Marginal covariance of the calibration, board poses marginalised.
   std::vector<CalibrationBlock> calib;
@@ -603,6 +609,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       warn("some board poses are not determined by their corners (damping " +
            std::to_string(info.nuisance_damping) + ")");
   }
+
+  stages.push_back(clock.Lap("covariance"));
 
   // Results per camera: values, sigma, weak intrinsics, residuals.
   for (std::size_t c = 0; c < cams.size(); ++c) {
@@ -680,6 +688,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   solver.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   result.rig.solver = solver;
+  log << "[camera-only] " << report::FormatStageTimes(stages) << "\n";
   return result;
 }
 
