@@ -158,7 +158,8 @@ int RunCalibrate(int argc, char** argv) {
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma.");
-  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity;
+  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity,
+      split_frame_rows;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
@@ -177,8 +178,14 @@ int RunCalibrate(int argc, char** argv) {
       "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
       "per-corner-blocks", po::bool_switch(),
       "one residual block per corner instead of one compressed block per global-shutter frame "
-      "(slower; for benchmarks)")("order", po::value(&options.order)->default_value(4),
-                                  "trajectory spline order: 4, 5, 6")(
+      "(slower; for benchmarks)")(
+      "split-frame-rows", po::value(&split_frame_rows)->default_value("auto"),
+      ("a compressed frame as two blocks, its pose rows and its intrinsic rows: auto (cameras "
+       "with more than " +
+       std::to_string(SplineCalibratorOptions::kSplitFrameRowsAbove) +
+       " views, where it saves memory), on, off (for benchmarks and tests)")
+          .c_str())("order", po::value(&options.order)->default_value(4),
+                    "trajectory spline order: 4, 5, 6")(
       "representation", po::value(&representation)->default_value("split"),
       "trajectory spline: split (SO3 x R3) or joint (SE3)")(
       "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
@@ -210,8 +217,17 @@ int RunCalibrate(int argc, char** argv) {
     options.representation = Se3Representation::kJoint;
   else
     return cli.UsageError("--representation must be split or joint, got " + representation);
+  if (split_frame_rows == "auto" || split_frame_rows == "on" || split_frame_rows == "off")
+    options.split_frame_rows = split_frame_rows == "auto" ? -1 : split_frame_rows == "on";
+  else
+    return cli.UsageError("--split-frame-rows must be auto, on or off, got " + split_frame_rows);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  try {
+    CheckOptions(options);  // before any data are read
+  } catch (const CalibrationInputError& e) {
+    return cli.UsageError(e.what());
+  }
   if (init_policy == "beyond-prior")
     options.coarse_init.policy = GuessPolicy::kBeyondPrior;
   else if (init_policy == "always")

@@ -110,6 +110,11 @@ class TableFile {
     }
     char buf[64];
     const auto res = std::to_chars(buf, buf + sizeof buf, x, format, precision);
+    if (res.ec != std::errc()) {
+      // "%.3f" of a number beyond 1e60 does not fit: exact instead (the buffer holds no text).
+      Exact(x);
+      return x;
+    }
     double back = x;
     std::from_chars(buf, res.ptr, back);
     text_.append(buf, res.ptr);

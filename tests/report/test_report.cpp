@@ -509,6 +509,23 @@ TEST_F(ReportTest, WrittenDataAreWhatTheFilesHoldToTheBit) {
   EXPECT_EQ(read.run_info, d.run_info);
 }
 
+// A corner coordinate whose "%.3f" does not fit the writer's buffer (1e60 and beyond: a diverged
+// prediction handed to the public writer) is written exactly, as the non-finite values are; the
+// writer appended its unwritten buffer before.
+TEST_F(ReportTest, CornerCoordinatesTooLongForFixedPointAreWrittenExactly) {
+  ReportData d;
+  CornerResidual c{7, 0, 1, 1e300, -2.5e61, 1e300, 0.5, 1.0, false};
+  d.corners["cam0"] = {c};
+  const ReportData stored = WriteReportData(dir_, d, 1);
+  const std::vector<CornerResidual> read = ReadCornerResiduals(CornersPath(dir_, "cam0"));
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_EQ(read[0].u, c.u);
+  EXPECT_EQ(read[0].v, c.v);
+  EXPECT_EQ(stored.corners.at("cam0")[0].u, c.u);
+  EXPECT_EQ(read[0].du, 1e300);  // "%.7g" fits
+  EXPECT_EQ(read[0].dv, 0.5);
+}
+
 // `ctcal calibrate` renders the report from the data it has just written, `ctcal report` from the
 // folder: the same HTML, byte for byte.
 TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
