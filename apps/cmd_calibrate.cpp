@@ -35,17 +35,22 @@ namespace {
 int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
                   const std::map<std::string, SensorData>& data, const std::string& out_dir,
                   const CalibrationLog& log, std::ofstream& log_file,
-                  const report::RunInfo& run_info, int threads) {
+                  const report::RunInfo& run_info, int threads, bool per_corner_blocks,
+                  report::StageClock* clock, const report::StageTime& detection) {
   CameraOnlyResult result;
   std::ostringstream stages;
+  CameraOnlyOptions options;
+  options.num_threads = threads;
+  options.per_corner_blocks = per_corner_blocks;
   try {
-    result = CalibrateCameraOnly(rig, data, CameraOnlyOptions(), stages);
+    result = CalibrateCameraOnly(rig, data, options, stages);
   } catch (const std::exception& e) {
     log(stages.str());
     log_file << "error: " << e.what() << '\n';
     return cli.InputError(e.what());
   }
   log(stages.str());
+  const report::StageTime calibration = clock->Lap("calibration");
   try {
     SaveRig(result.rig, out_dir + "/result.yaml");
     SaveKalibrFiles(result.rig, out_dir);
@@ -54,6 +59,8 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   }
   log(FormatParameterTable(result.rig));
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
+      ", " + report::FormatStageTime(clock->Lap("results")));
   WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, threads);
   return kExitOk;
 }
@@ -284,7 +291,8 @@ int RunCalibrate(int argc, char** argv) {
           " does not apply to a rig without IMUs: calibrating the cameras alone (one result, "
           "solver.method camera_only)");
     }
-    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info, options.threads);
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info, options.threads,
+                         !options.compress_frames, &clock, detection);
   }
   if (method != "spline") {
     discrete_options.threads = options.threads;
