@@ -366,9 +366,10 @@ class SplineProblem {
       }
       solver_ = std::make_unique<LevenbergMarquardt>(so, border, problem_.get());
       // Long recordings' compressed inertial blocks span many knots: their band (on both threads)
-      // would hold more than Ceres' Jacobian and J^T J together (10 min at 1 kHz: +76 MB), so
-      // they stay with Ceres (docs/performance.md step 7f).
-      const bool ceres_solves = solver_->NormalEquationsBytes() > solver_->JacobianBytes() / 2;
+      // would hold more than Ceres' Jacobian and J^T J together (10 min at 1 kHz: +76 MB, with
+      // normal equations estimated larger than the Jacobian), so they stay with Ceres
+      // (docs/performance.md step 7f; the demo: 58 MB against 127 MB).
+      const bool ceres_solves = solver_->NormalEquationsBytes() > solver_->JacobianBytes();
       char line[160];
       std::snprintf(line, sizeof line, "    normal equations %.0f MB, Jacobian %.0f MB: %s",
                     1e-6 * static_cast<double>(solver_->NormalEquationsBytes()),
