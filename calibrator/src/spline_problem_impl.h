@@ -376,8 +376,10 @@ class SplineProblem {
                     1e-6 * static_cast<double>(solver_->JacobianBytes()),
                     ceres_solves ? "Ceres solves" : "own Levenberg-Marquardt");
       log_(line);
-      if (ceres_solves)
+      if (ceres_solves) {
         solver_.reset();
+        ReleaseFreedMemory();  // its pattern, before Ceres' Jacobian takes the heap
+      }
     }
     if (solver_ != nullptr)
       solver_->Solve(&summary);
