@@ -346,7 +346,7 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
                   const std::vector<CornerResiduals>& corners,
                   const std::vector<InertialResidualSums>& inertial,
                   const SplineCalibratorOptions& options, const CalibrationLog& log,
-                  SplineCalibrationResult* out) {
+                  SplineCalibrationResult* out, const SolvedInformation* solved) {
   RigConfig& result = out->result;
   const std::optional<SolverSummary> solver = result.solver;
   result = state.ToRig();
@@ -426,12 +426,29 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
         data_only.push_back(id);
     }
   }
-  // One Schur complement of the data; the priors (on calibration blocks only) add to it.
-  const MarginalInformation info_data =
-      ComputeMarginalInformation(problem, calib, data_only, options.threads);
+  // One Schur complement of the data; the priors (on calibration blocks only) add to it. The
+  // solver's is of the data and the priors: the priors' J^T J (at most their sigma's 1 / (a few
+  // sigma of the data)^2 of it, and exact) taken out gives the data's.
+  std::vector<double*> calib_values;
+  for (const CalibrationBlock& b : calib)
+    calib_values.push_back(b.values);
+  MarginalInformation info_data, info;
+  if (solved != nullptr && solved->blocks == calib_values) {
+    info = solved->information;
+    for (const CalibrationBlock& b : calib) {
+      info.names.insert(info.names.end(), b.names.begin(), b.names.end());
+      info.unit.conservativeResize(info.unit.size() + static_cast<Eigen::Index>(b.unit.size()));
+      info.unit.tail(static_cast<Eigen::Index>(b.unit.size())) = Eigen::Map<const Eigen::VectorXd>(
+          b.unit.data(), static_cast<Eigen::Index>(b.unit.size()));
+    }
+    info_data = info;
+    AddCalibrationInformation(problem, calib, prior_ids, &info_data, -1.0);
+  } else {
+    info_data = ComputeMarginalInformation(problem, calib, data_only, options.threads);
+    info = info_data;
+    AddCalibrationInformation(problem, calib, prior_ids, &info);
+  }
   LogMemory(log, "marginal information");
-  MarginalInformation info = info_data;
-  AddCalibrationInformation(problem, calib, prior_ids, &info);
   const CalibrationCovariance cov = InvertInformation(info);
   const CalibrationCovariance cov_data = prior_ids.empty() ? cov : InvertInformation(info_data);
   if (info.nuisance_damping > 0.0)

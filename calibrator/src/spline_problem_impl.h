@@ -15,10 +15,12 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/lm_solver.h"
 #include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
@@ -136,12 +138,21 @@ std::vector<ceres::ResidualBlockId> AddCalibrationPriors(
 void LogOutliers(const std::vector<CameraOutliers>& outliers, double outlier_probability,
                  const CalibrationLog& log);
 
+// The information of `blocks` with every other free block marginalised, of all residual blocks
+// (priors included), from the last solve (LevenbergMarquardt::MarginalizeToBorder).
+struct SolvedInformation {
+  std::vector<double*> blocks;
+  MarginalInformation information;
+};
+
+// `solved`: the covariance's information when the solver has it for exactly the estimated
+// calibration blocks; else (nullptr) it is computed from the problem.
 void FinishResult(ceres::Problem& problem, CalibrationState& state,
                   const std::vector<ceres::ResidualBlockId>& prior_ids,
                   const std::vector<CornerResiduals>& corners,
                   const std::vector<InertialResidualSums>& inertial,
                   const SplineCalibratorOptions& options, const CalibrationLog& log,
-                  SplineCalibrationResult* out);
+                  SplineCalibrationResult* out, const SolvedInformation* solved = nullptr);
 
 ceres::Solver::Options SolverOptions(const SplineCalibratorOptions& options,
                                      ceres::IterationCallback* callback);
@@ -273,6 +284,7 @@ class SplineProblem {
     const bool any_split = std::any_of(prep_.cameras.begin(), prep_.cameras.end(),
                                        [&](const PreparedCamera& c) { return SplitsFrameRows(c); });
     po.evaluation_callback = any_split ? &point_in_memory_ : nullptr;
+    solver_.reset();  // it reads the old problem
     problem_ = std::make_unique<ceres::Problem>(po);
     kept_corners_.clear();
     inertial_ids_.clear();
@@ -343,7 +355,36 @@ class SplineProblem {
           std::max(so.function_tolerance, options_.stop_cost_change / last_cost_);
     }
     ceres::Solver::Summary summary;
-    ceres::Solve(so, problem_.get(), &summary);
+    solver_.reset();
+    if (options_.lm_solver) {
+      // The estimated calibration blocks couple to nearly every residual: the dense border. The
+      // solver stays for the covariance (Finish), which needs H at the last solve's final point.
+      std::vector<double*> border;
+      for (const ParameterBlockInfo& b : blocks_) {
+        if (b.estimated)
+          border.push_back(b.values);
+      }
+      solver_ = std::make_unique<LevenbergMarquardt>(so, border, problem_.get());
+      // Long recordings' compressed inertial blocks span many knots: their band (on both threads)
+      // would hold more than Ceres' Jacobian and J^T J together (10 min at 1 kHz: +76 MB, with
+      // normal equations estimated larger than the Jacobian), so they stay with Ceres
+      // (docs/performance.md step 7f; the demo: 58 MB against 127 MB).
+      const bool ceres_solves = solver_->NormalEquationsBytes() > solver_->JacobianBytes();
+      char line[160];
+      std::snprintf(line, sizeof line, "    normal equations %.0f MB, Jacobian %.0f MB: %s",
+                    1e-6 * static_cast<double>(solver_->NormalEquationsBytes()),
+                    1e-6 * static_cast<double>(solver_->JacobianBytes()),
+                    ceres_solves ? "Ceres solves" : "own Levenberg-Marquardt");
+      log_(line);
+      if (ceres_solves) {
+        solver_.reset();
+        ReleaseFreedMemory();  // its pattern, before Ceres' Jacobian takes the heap
+      }
+    }
+    if (solver_ != nullptr)
+      solver_->Solve(&summary);
+    else
+      ceres::Solve(so, problem_.get(), &summary);
     last_cost_ = summary.final_cost;
     if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost))
       throw CalibrationFailure("the solve diverged (" + summary.message +
@@ -486,7 +527,16 @@ class SplineProblem {
       });
       inertial.push_back(sums);
     }
-    FinishResult(*problem_, state_, prior_ids_, corners, inertial, options_, log_, out);
+    // The covariance from the last solve's normal equations at its final point, where it has them.
+    std::optional<SolvedInformation> solved;
+    if (solver_ != nullptr) {
+      solved.emplace();
+      solved->blocks = solver_->Border();
+      solved->information = solver_->MarginalizeToBorder();
+      solver_.reset();
+    }
+    FinishResult(*problem_, state_, prior_ids_, corners, inertial, options_, log_, out,
+                 solved ? &*solved : nullptr);
   }
 
   // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
@@ -500,7 +550,10 @@ class SplineProblem {
 
   ceres::Problem& problem() { return *problem_; }
   // Destroys the problem (its residual blocks); the values stay in the spline and the state.
-  void ReleaseProblem() { problem_.reset(); }
+  void ReleaseProblem() {
+    solver_.reset();
+    problem_.reset();
+  }
 
   // T_W_B at base-clock time t_ns, extrapolating the end segments as the residuals do.
   Se3Kinematics<double> EvaluateClamped(std::int64_t t_ns, int derivatives) {
@@ -929,6 +982,7 @@ class SplineProblem {
   CalibrationLog log_;
   Spline spline_;
   std::unique_ptr<ceres::Problem> problem_;
+  std::unique_ptr<LevenbergMarquardt> solver_;  // of the last solve (lm_solver)
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;

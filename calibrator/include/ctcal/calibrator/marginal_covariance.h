@@ -54,9 +54,10 @@ MarginalInformation ComputeMarginalInformation(
 // info->information. Since such terms touch H_cc alone, the Schur complement of data + priors is
 // the data's plus theirs: one factorisation of H_nn serves both (throws std::runtime_error when
 // the residuals cannot be evaluated, std::logic_error when one touches a nuisance block).
+// weight -1 takes them out of an information that holds them.
 void AddCalibrationInformation(ceres::Problem& problem, const std::vector<CalibrationBlock>& calib,
                                const std::vector<ceres::ResidualBlockId>& residual_blocks,
-                               MarginalInformation* info);
+                               MarginalInformation* info, double weight = 1.0);
 
 struct CalibrationCovariance {
   Eigen::MatrixXd covariance;  // tangent space; pseudo-inverse on the determined subspace

@@ -90,6 +90,10 @@ struct SplineCalibratorOptions {
   // (spline_problem_impl.h RobustStageStop) instead of computing that step; false: Ceres'
   // relative function tolerance of 1e-6 alone.
   bool robust_early_stop = true;
+  // The spline solves by SolveLevenbergMarquardt (lm_solver.h: Ceres' Levenberg-Marquardt with
+  // J^T J assembled on `threads` threads, the calibration blocks as the Schur border); false:
+  // ceres::Solve (the reference of the tests).
+  bool lm_solver = true;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.

@@ -1,0 +1,286 @@
+#include "normal_equations.h"
+
+#include <Eigen/CholmodSupport>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+namespace ctcal {
+
+NormalEquations::NormalEquations(std::vector<int> tangent, int nuisance_blocks,
+                                 const std::vector<std::vector<int>>& blocks_of)
+    : tangent_(std::move(tangent)), nb_(nuisance_blocks) {
+  offset_.resize(tangent_.size() + 1, 0);
+  for (std::size_t b = 0; b < tangent_.size(); ++b)
+    offset_[b + 1] = offset_[b] + tangent_[b];
+  n_ = offset_[static_cast<std::size_t>(nb_)];
+  c_ = offset_.back() - n_;
+  block_of_col_.resize(static_cast<std::size_t>(offset_.back()));
+  for (std::size_t b = 0; b < tangent_.size(); ++b)
+    std::fill(block_of_col_.begin() + offset_[b], block_of_col_.begin() + offset_[b + 1],
+              static_cast<int>(b));
+  // Row blocks below the diagonal block of every nuisance column block.
+  below_.resize(static_cast<std::size_t>(nb_));
+  for (const std::vector<int>& blocks : blocks_of) {
+    for (const int j : blocks) {
+      for (const int i : blocks) {
+        if (j < nb_ && i < nb_ && i > j)
+          below_[static_cast<std::size_t>(j)].push_back(i);
+      }
+    }
+  }
+  below_start_.resize(static_cast<std::size_t>(nb_));
+  std::int64_t nnz = 0;
+  for (int j = 0; j < nb_; ++j) {
+    std::vector<int>& rows = below_[static_cast<std::size_t>(j)];
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    rows.shrink_to_fit();
+    std::vector<int>& start = below_start_[static_cast<std::size_t>(j)];
+    start.resize(rows.size());
+    int below = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      start[k] = below;
+      below += tangent_[static_cast<std::size_t>(rows[k])];
+    }
+    const int t = tangent_[static_cast<std::size_t>(j)];
+    nnz += static_cast<std::int64_t>(t) * below + t * (t + 1) / 2;
+  }
+  if (nnz > std::numeric_limits<int>::max())
+    throw std::runtime_error("normal equations: the nuisance information has too many entries");
+  // Column q of block j: the rows q..t-1 of block j (its diagonal first), then every block below.
+  H_nn_.resize(n_, n_);
+  H_nn_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = H_nn_.outerIndexPtr();
+  int* inner = H_nn_.innerIndexPtr();
+  int k = 0;
+  for (int j = 0; j < nb_; ++j) {
+    const int t = tangent_[static_cast<std::size_t>(j)];
+    const int off = offset_[static_cast<std::size_t>(j)];
+    for (int q = 0; q < t; ++q) {
+      outer[off + q] = k;
+      for (int p = q; p < t; ++p)
+        inner[k++] = off + p;
+      for (const int i : below_[static_cast<std::size_t>(j)]) {
+        for (int p = 0; p < tangent_[static_cast<std::size_t>(i)]; ++p)
+          inner[k++] = offset_[static_cast<std::size_t>(i)] + p;
+      }
+    }
+  }
+  outer[n_] = k;
+  H_nc_.resize(n_, c_);
+  H_cc_.resize(c_, c_);
+  SetZero();
+}
+
+void NormalEquations::SetZero() {
+  std::fill(H_nn_.valuePtr(), H_nn_.valuePtr() + H_nn_.nonZeros(), 0.0);
+  H_nc_.setZero();
+  H_cc_.setZero();
+}
+
+void NormalEquations::Release() {
+  H_nn_ = SparseColMajor();
+  H_nc_ = Eigen::MatrixXd();
+  H_cc_ = Eigen::MatrixXd();
+  below_ = {};
+  below_start_ = {};
+  block_of_col_ = {};
+  G_ = Eigen::MatrixXd();
+}
+
+void NormalEquations::AddValues(const NormalEquations& other) {
+  if (other.H_nn_.nonZeros() != H_nn_.nonZeros() || other.n_ != n_ || other.c_ != c_)
+    throw std::logic_error("normal equations: adding values of another pattern");
+  Eigen::Map<Eigen::VectorXd>(H_nn_.valuePtr(), H_nn_.nonZeros()) +=
+      Eigen::Map<const Eigen::VectorXd>(other.H_nn_.valuePtr(), other.H_nn_.nonZeros());
+  H_nc_ += other.H_nc_;
+  H_cc_ += other.H_cc_;
+}
+
+Eigen::VectorXd NormalEquations::Diagonal() const {
+  Eigen::VectorXd d(n_ + c_);
+  for (int i = 0; i < n_; ++i)
+    d(i) = H_nn_.valuePtr()[H_nn_.outerIndexPtr()[i]];  // the diagonal leads its column
+  d.tail(c_) = H_cc_.diagonal();
+  return d;
+}
+
+Eigen::VectorXd NormalEquations::Multiply(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd y(n_ + c_);
+  const auto x_n = x.head(n_);
+  const auto x_c = x.tail(c_);
+  y.head(n_) = H_nn_.selfadjointView<Eigen::Lower>() * x_n;
+  y.head(n_) += H_nc_ * x_c;
+  y.tail(c_) = H_nc_.transpose() * x_n;
+  y.tail(c_) += H_cc_ * x_c;
+  return y;
+}
+
+void NormalEquations::Add(const ceres::CRSMatrix& J, const std::vector<int>& rows_per_block) {
+  int r = 0;
+  for (const int m : rows_per_block) {
+    if (m > 0) {
+      // Every row of a residual block holds the same columns (Ceres writes all of a residual
+      // block's non-constant parameter blocks into each of its rows), in increasing order.
+      const int begin = J.rows[static_cast<std::size_t>(r)];
+      const int k = J.rows[static_cast<std::size_t>(r) + 1] - begin;
+      if (J.rows[static_cast<std::size_t>(r + m)] - begin != m * k)
+        throw std::logic_error("normal equations: a residual block's rows differ in their columns");
+      runs_.clear();
+      for (int e = 0; e < k;) {
+        const int col = J.cols[static_cast<std::size_t>(begin + e)];
+        const int b = block_of_col_[static_cast<std::size_t>(col)];
+        const int t = tangent_[static_cast<std::size_t>(b)];
+        if (col != offset_[static_cast<std::size_t>(b)] || e + t > k ||
+            J.cols[static_cast<std::size_t>(begin + e + t - 1)] != col + t - 1)
+          throw std::logic_error(
+              "normal equations: a parameter block's columns are not contiguous");
+        runs_.push_back(Run{b, e});
+        e += t;
+      }
+      AddBlock(J.values.data() + begin, m, k, runs_);
+    }
+    r += m;
+  }
+}
+
+void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<Run>& runs) {
+  if (k == 0 || m == 0)
+    return;
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> M(
+      J, m, k);
+  G_.resize(k, k);
+  G_.setZero();
+  G_.selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
+  // Only G's lower triangle is set: G(a, b) for entry a after entry b, else G(b, a).
+  const auto g = [this](int a, int b) { return a >= b ? G_(a, b) : G_(b, a); };
+  double* values = H_nn_.valuePtr();
+  const int* outer = H_nn_.outerIndexPtr();
+  for (const Run& v : runs) {
+    const int j = v.block;
+    const int tj = tangent_[static_cast<std::size_t>(j)];
+    if (j >= nb_) {
+      // A border column: its border rows (H_cc, full); its nuisance rows are H_nc.
+      for (const Run& u : runs) {
+        if (u.block < nb_)
+          continue;
+        const int ti = tangent_[static_cast<std::size_t>(u.block)];
+        const int ri = offset_[static_cast<std::size_t>(u.block)] - n_;
+        const int cj = offset_[static_cast<std::size_t>(j)] - n_;
+        for (int q = 0; q < tj; ++q) {
+          for (int p = 0; p < ti; ++p)
+            H_cc_(ri + p, cj + q) += g(u.first + p, v.first + q);
+        }
+      }
+      continue;
+    }
+    const std::vector<int>& below = below_[static_cast<std::size_t>(j)];
+    const std::vector<int>& below_start = below_start_[static_cast<std::size_t>(j)];
+    for (const Run& u : runs) {
+      const int i = u.block;
+      const int ti = tangent_[static_cast<std::size_t>(i)];
+      const int oj = offset_[static_cast<std::size_t>(j)];
+      if (i >= nb_) {
+        const int ci = offset_[static_cast<std::size_t>(i)] - n_;
+        for (int q = 0; q < tj; ++q) {
+          for (int p = 0; p < ti; ++p)
+            H_nc_(oj + q, ci + p) += g(u.first + p, v.first + q);
+        }
+      } else if (i == j) {
+        for (int q = 0; q < tj; ++q) {
+          double* col = values + outer[oj + q];
+          for (int p = q; p < tj; ++p)
+            col[p - q] += g(u.first + p, v.first + q);
+        }
+      } else if (i > j) {
+        const auto it = std::lower_bound(below.begin(), below.end(), i);
+        const int start = below_start[static_cast<std::size_t>(it - below.begin())];
+        for (int q = 0; q < tj; ++q) {
+          double* col = values + outer[oj + q] + (tj - q) + start;
+          for (int p = 0; p < ti; ++p)
+            col[p] += g(u.first + p, v.first + q);
+        }
+      }
+    }
+  }
+}
+
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping) {
+  using SparseColMajor = NormalEquations::SparseColMajor;
+  const int n = normal->n(), c = normal->c();
+  *nuisance_damping = 0.0;
+  const Eigen::MatrixXd H_cc = normal->H_cc();
+  if (n == 0)
+    return H_cc;
+  // A nuisance state no residual touches (a trajectory or bias knot beyond the samples the data
+  // selection kept) has a zero diagonal, hence (H is PSD) a zero row and column: it carries no
+  // information and couples to nothing, so it is left out exactly instead of being damped.
+  SparseColMajor H_nn;
+  Eigen::MatrixXd H_nc;
+  {
+    SparseColMajor& L = normal->H_nn();
+    std::vector<int> keep(static_cast<std::size_t>(n), -1);
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      if (L.valuePtr()[L.outerIndexPtr()[i]] > 0.0)  // the diagonal leads its column
+        keep[static_cast<std::size_t>(i)] = m++;
+    }
+    if (m == n) {
+      // Every state touched (the usual case): no copy.
+      H_nn.swap(L);
+      H_nc.swap(normal->H_nc());
+    } else {
+      std::vector<Eigen::Triplet<double>> entries;
+      for (int j = 0; j < n; ++j) {
+        if (keep[static_cast<std::size_t>(j)] < 0)
+          continue;
+        for (SparseColMajor::InnerIterator it(L, j); it; ++it) {
+          if (keep[static_cast<std::size_t>(it.row())] >= 0)
+            entries.emplace_back(keep[static_cast<std::size_t>(it.row())],
+                                 keep[static_cast<std::size_t>(j)], it.value());
+        }
+      }
+      H_nn.resize(m, m);
+      H_nn.setFromTriplets(entries.begin(), entries.end());
+      H_nc.resize(m, c);
+      for (int i = 0; i < n; ++i) {
+        if (keep[static_cast<std::size_t>(i)] >= 0)
+          H_nc.row(keep[static_cast<std::size_t>(i)]) = normal->H_nc().row(i);
+      }
+    }
+    normal->Release();
+  }
+  const int m = static_cast<int>(H_nn.rows());
+
+  // A combination of touched nuisance states the data do not determine makes H_nn singular;
+  // damping it by a tiny fraction of its scale marginalises it with a flat prior instead of
+  // failing, and the amount is reported. Only H_nn's lower triangle is stored (and read).
+  double max_diag = 0.0;
+  for (int i = 0; i < m; ++i)
+    max_diag = std::max(max_diag, H_nn.valuePtr()[H_nn.outerIndexPtr()[i]]);
+  Eigen::CholmodSupernodalLLT<SparseColMajor, Eigen::Lower> llt;
+  // A failed attempt is handled (and reported) by the damping below; CHOLMOD's own message would
+  // only repeat it without context, so it stays silent (print level 0) and info() is checked.
+  llt.cholmod().print = 0;
+  llt.compute(H_nn);
+  for (const double relative : {1e-12, 1e-9, 1e-6}) {
+    if (llt.info() == Eigen::Success)
+      break;
+    SparseColMajor damped = H_nn;
+    for (int i = 0; i < m; ++i)
+      damped.valuePtr()[damped.outerIndexPtr()[i]] += relative * std::max(max_diag, 1.0);
+    llt.compute(damped);
+    *nuisance_damping = relative;
+  }
+  if (llt.info() != Eigen::Success)
+    throw std::runtime_error("covariance: the nuisance information cannot be factored");
+  H_nn = SparseColMajor();  // the factor holds what the solve needs
+  const Eigen::MatrixXd X = llt.solve(H_nc);
+  Eigen::MatrixXd information = H_cc - H_nc.transpose() * X;
+  return 0.5 * (information + information.transpose()).eval();
+}
+
+}  // namespace ctcal

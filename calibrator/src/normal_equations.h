@@ -1,0 +1,94 @@
+// H = J^T J of a least-squares problem, held as [H_nn H_nc; H_cn H_cc] in a pattern fixed once
+// from the residual blocks' parameter blocks, and accumulated in place residual block by residual
+// block: the Levenberg-Marquardt solver's normal equations (lm_solver.cpp) and the marginal
+// covariance's information (marginal_covariance.cpp). Private to the calibrator library.
+#pragma once
+
+#include <ceres/crs_matrix.h>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace ctcal {
+
+// The columns are parameter blocks (their tangent spaces): the first `nuisance_blocks` are the
+// nuisance states n (a sparse, banded coupling: the trajectory and bias knots), the rest the
+// border c (coupled to nearly everything: the calibration). H_nn is held as its lower triangle in a
+// sparse pattern (columns, then rows, in the order of the column blocks), H_nc and H_cc densely.
+// Adding a chunk's J^T J to a growing Eigen sparse matrix (`H += Jt J`) held the old sum, the new
+// sum and the product at once: three copies of H_nn, the peak of a 10 min 1 kHz run
+// (docs/performance.md, step 7). Here every block's J_b^T J_b (dense, rows x cols^2) is scattered
+// into the one H_nn.
+class NormalEquations {
+ public:
+  using SparseColMajor = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+  // A residual block's columns: column block `block` is J's columns [first, first + tangent).
+  struct Run {
+    int block;
+    int first;
+  };
+
+  // tangent: tangent size of each column block in column order; the first `nuisance_blocks` are
+  // the nuisance states. blocks_of: for every residual block, its column blocks (any order).
+  NormalEquations(std::vector<int> tangent, int nuisance_blocks,
+                  const std::vector<std::vector<int>>& blocks_of);
+
+  int n() const { return n_; }
+  int c() const { return c_; }
+  int NumBlocks() const { return static_cast<int>(tangent_.size()); }
+  int Tangent(int block) const { return tangent_[static_cast<std::size_t>(block)]; }
+  // The first column of a column block (nuisance and border counted together: border columns
+  // start at n()).
+  int Offset(int block) const { return offset_[static_cast<std::size_t>(block)]; }
+
+  // Adds J^T J of a Jacobian (Problem::Evaluate's CRS over the columns above) whose consecutive
+  // row groups of `rows_per_block` are the residual blocks.
+  void Add(const ceres::CRSMatrix& J, const std::vector<int>& rows_per_block);
+
+  // Adds J^T J of one residual block: J is m x k, row-major, its columns the runs' blocks.
+  void AddBlock(const double* J, int m, int k, const std::vector<Run>& runs);
+
+  // Every value 0 (the pattern kept).
+  void SetZero();
+  // Adds the values of `other`, built on the same pattern (a thread's partial sum).
+  void AddValues(const NormalEquations& other);
+
+  // The diagonal of H (n + c values).
+  Eigen::VectorXd Diagonal() const;
+  // y = H x (H symmetric: its lower triangle and border as held).
+  Eigen::VectorXd Multiply(const Eigen::VectorXd& x) const;
+
+  SparseColMajor& H_nn() { return H_nn_; }
+  const SparseColMajor& H_nn() const { return H_nn_; }
+  Eigen::MatrixXd& H_nc() { return H_nc_; }
+  const Eigen::MatrixXd& H_nc() const { return H_nc_; }
+  const Eigen::MatrixXd& H_cc() const { return H_cc_; }
+  // Frees the values and the pattern (MarginalizeNuisance, once it has taken them over).
+  void Release();
+
+ private:
+  std::vector<int> tangent_;
+  std::vector<int> offset_;
+  int nb_ = 0;
+  int n_ = 0;
+  int c_ = 0;
+  std::vector<int> block_of_col_;
+  std::vector<std::vector<int>> below_;        // per nuisance column block, sorted row blocks
+  std::vector<std::vector<int>> below_start_;  // their first row's place below the diagonal block
+  SparseColMajor H_nn_;                        // lower triangle
+  Eigen::MatrixXd H_nc_;
+  Eigen::MatrixXd H_cc_;
+  std::vector<Run> runs_;  // scratch of Add
+  Eigen::MatrixXd G_;      // scratch of AddBlock
+};
+
+// The border's information with the nuisance states marginalised, H_cc - H_cn H_nn^-1 H_nc (H_nn
+// factored by CHOLMOD). A nuisance state no residual touches (zero diagonal) is left out exactly;
+// a singular H_nn is damped by 1e-12, 1e-9 or 1e-6 of its largest diagonal, the amount returned
+// in *nuisance_damping (0 when none was needed). Takes H's values over (H is released). Throws
+// std::runtime_error when H_nn cannot be factored even damped.
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping);
+
+}  // namespace ctcal
