@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <future>
 
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/report/report.h"
@@ -35,14 +36,24 @@ bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
   try {
     data.run_info.insert(data.run_info.begin(), run_info.begin(), run_info.end());
     // The report is drawn from the data as written (rounded as the files hold them), not read
-    // back: the same report as `ctcal report --out OUT` draws from the folder.
-    const report::ReportData stored = report::WriteReportData(out_dir, std::move(data), threads);
+    // back: the same report as `ctcal report --out OUT` draws from the folder. The tables it
+    // draws rounded are written first; the exact ones (inertial samples, trajectory, ...) on one
+    // more thread while the report is drawn (their CPU is in the figures' stage). `exact` is
+    // declared after `stored`, which it reads: its destructor waits for the writer on a throw.
+    const report::ReportData stored =
+        report::WriteRoundedReportData(out_dir, std::move(data), threads);
+    std::future<void> exact = std::async(std::launch::async, [&out_dir, &stored] {
+      report::WriteExactReportData(out_dir, stored, 1);
+    });
     const report::StageTime written = clock.Lap("report data");
     report::ReportOptions options;
     options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
     options.threads = threads;
     report::ReportOutput out = report::RenderReport(out_dir, stored, options);
+    report::StageClock rest;
+    exact.get();  // the writer's error, if any
     out.stages.insert(out.stages.begin(), written);
+    out.stages.push_back(rest.Lap("exact data's rest"));
     int fails = 0, warns = 0;
     for (const report::Check& c : out.checks) {
       fails += c.status == report::Status::kFail;

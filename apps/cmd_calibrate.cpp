@@ -35,17 +35,22 @@ namespace {
 int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
                   const std::map<std::string, SensorData>& data, const std::string& out_dir,
                   const CalibrationLog& log, std::ofstream& log_file,
-                  const report::RunInfo& run_info, int threads) {
+                  const report::RunInfo& run_info, int threads, bool per_corner_blocks,
+                  report::StageClock* clock, const report::StageTime& detection) {
   CameraOnlyResult result;
   std::ostringstream stages;
+  CameraOnlyOptions options;
+  options.num_threads = threads;
+  options.per_corner_blocks = per_corner_blocks;
   try {
-    result = CalibrateCameraOnly(rig, data, CameraOnlyOptions(), stages);
+    result = CalibrateCameraOnly(rig, data, options, stages);
   } catch (const std::exception& e) {
     log(stages.str());
     log_file << "error: " << e.what() << '\n';
     return cli.InputError(e.what());
   }
   log(stages.str());
+  const report::StageTime calibration = clock->Lap("calibration");
   try {
     SaveRig(result.rig, out_dir + "/result.yaml");
     SaveKalibrFiles(result.rig, out_dir);
@@ -54,6 +59,8 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   }
   log(FormatParameterTable(result.rig));
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
+      ", " + report::FormatStageTime(clock->Lap("results")));
   WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, threads);
   return kExitOk;
 }
@@ -151,7 +158,8 @@ int RunCalibrate(int argc, char** argv) {
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma.");
-  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity;
+  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity,
+      split_frame_rows;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()("rig", po::value(&rig_path)->required(),
@@ -170,8 +178,14 @@ int RunCalibrate(int argc, char** argv) {
       "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
       "per-corner-blocks", po::bool_switch(),
       "one residual block per corner instead of one compressed block per global-shutter frame "
-      "(slower; for benchmarks)")("order", po::value(&options.order)->default_value(4),
-                                  "trajectory spline order: 4, 5, 6")(
+      "(slower; for benchmarks)")(
+      "split-frame-rows", po::value(&split_frame_rows)->default_value("auto"),
+      ("a compressed frame as two blocks, its pose rows and its intrinsic rows: auto (cameras "
+       "with more than " +
+       std::to_string(SplineCalibratorOptions::kSplitFrameRowsAbove) +
+       " views, where it saves memory), on, off (for benchmarks and tests)")
+          .c_str())("order", po::value(&options.order)->default_value(4),
+                    "trajectory spline order: 4, 5, 6")(
       "representation", po::value(&representation)->default_value("split"),
       "trajectory spline: split (SO3 x R3) or joint (SE3)")(
       "knot-spacing", po::value(&options.knot_spacing_s)->default_value(0.0),
@@ -203,8 +217,17 @@ int RunCalibrate(int argc, char** argv) {
     options.representation = Se3Representation::kJoint;
   else
     return cli.UsageError("--representation must be split or joint, got " + representation);
+  if (split_frame_rows == "auto" || split_frame_rows == "on" || split_frame_rows == "off")
+    options.split_frame_rows = split_frame_rows == "auto" ? -1 : split_frame_rows == "on";
+  else
+    return cli.UsageError("--split-frame-rows must be auto, on or off, got " + split_frame_rows);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  try {
+    CheckOptions(options);  // before any data are read
+  } catch (const CalibrationInputError& e) {
+    return cli.UsageError(e.what());
+  }
   if (init_policy == "beyond-prior")
     options.coarse_init.policy = GuessPolicy::kBeyondPrior;
   else if (init_policy == "always")
@@ -284,7 +307,8 @@ int RunCalibrate(int argc, char** argv) {
           " does not apply to a rig without IMUs: calibrating the cameras alone (one result, "
           "solver.method camera_only)");
     }
-    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info, options.threads);
+    return RunCameraOnly(cli, rig, data, out_dir, log, log_file, run_info, options.threads,
+                         !options.compress_frames, &clock, detection);
   }
   if (method != "spline") {
     discrete_options.threads = options.threads;

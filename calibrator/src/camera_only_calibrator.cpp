@@ -14,11 +14,14 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
+#include "ctcal/calibrator/camera_only/board_frame_corners.h"
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/report_data_builder.h"
+#include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -37,8 +40,8 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 // So3LeftManifold, whose tangent is the SPEC's rotation perturbation: the marginal covariance is
 // then directly the `sigma: R_B_S` of the result.
 template <class Model>
-struct CornerResidual {
-  CornerResidual(const Eigen::Vector3d& p_W, const Eigen::Vector2d& uv, double sigma)
+struct BoardCornerResidual {
+  BoardCornerResidual(const Eigen::Vector3d& p_W, const Eigen::Vector2d& uv, double sigma)
       : p_W_(p_W), uv_(uv), inv_sigma_(1.0 / sigma) {}
 
   template <typename T>
@@ -63,27 +66,32 @@ struct CornerResidual {
   double inv_sigma_;
 };
 
+// A pose [q (x, y, z, w), p]: a board pose is one 7-double block on BoardPoseManifold (frame
+// blocks) or the two blocks q, p (per-corner blocks); T_B_C is always the two blocks.
 struct PoseBlock {
-  double q[4] = {0, 0, 0, 1};  // x, y, z, w
-  double p[3] = {0, 0, 0};
+  double x[7] = {0, 0, 0, 1, 0, 0, 0};
+  double* q() { return x; }
+  double* p() { return x + 4; }
+  const double* q() const { return x; }
+  const double* p() const { return x + 4; }
 };
 
 void SetPose(const Eigen::Isometry3d& T, PoseBlock* block) {
   const Eigen::Quaterniond q(T.linear());
-  block->q[0] = q.x();
-  block->q[1] = q.y();
-  block->q[2] = q.z();
-  block->q[3] = q.w();
+  block->x[0] = q.x();
+  block->x[1] = q.y();
+  block->x[2] = q.z();
+  block->x[3] = q.w();
   for (int i = 0; i < 3; ++i)
-    block->p[i] = T.translation()(i);
+    block->p()[i] = T.translation()(i);
 }
 
 Eigen::Isometry3d GetPose(const PoseBlock& block) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Quaterniond(block.q[3], block.q[0], block.q[1], block.q[2])
+  T.linear() = Eigen::Quaterniond(block.x[3], block.x[0], block.x[1], block.x[2])
                    .normalized()
                    .toRotationMatrix();
-  T.translation() = Eigen::Vector3d(block.p[0], block.p[1], block.p[2]);
+  T.translation() = Eigen::Vector3d(block.x[4], block.x[5], block.x[6]);
   return T;
 }
 
@@ -142,6 +150,10 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
                                      const std::map<std::string, SensorData>& data,
                                      const CameraOnlyOptions& options, std::ostream& log) {
   const auto wall_start = std::chrono::steady_clock::now();
+  report::StageClock clock;  // the log's `time:` line of the stages
+  const int threads = options.num_threads > 0
+                          ? options.num_threads
+                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (!rig.IsCameraOnly())
     throw std::runtime_error("camera-only calibration: the rig has an inertial sensor");
   ValidateRig(rig, "camera-only calibration");
@@ -192,8 +204,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     bool reinit = false;
     if (cam->config->Estimates(EstimateItem::kIntrinsics)) {
       try {
-        const BoardPosesResult guess = InitBoardPoses(name, cam->model, board, corners,
-                                                      options.min_corners, options.min_views, {});
+        const BoardPosesResult guess = InitBoardPoses(
+            name, cam->model, board, corners, options.min_corners, options.min_views, {}, threads);
         const double rms_px = guess.median_rms_ray * cam->model.params()(focal_index);
         reinit = rms_px > options.reinit_rms_px;
         log << "[camera-only] " << name << ": the guessed intrinsics reproject at " << rms_px
@@ -212,7 +224,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       cam->report.intrinsics_reinitialised = true;
     }
     cam->views = InitBoardPoses(name, cam->model, board, corners, options.min_corners,
-                                options.min_views, init_log)
+                                options.min_views, init_log, threads)
                      .views;
     cam->report.view_spread_deg = ViewSpreadDeg(cam->views);
   }
@@ -319,19 +331,32 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
           << " corners and no reference pose)\n";
   }
 
-  // The problem, built twice: robust (Huber) on every corner, then L2 on the inliers.
-  So3LeftManifold so3;
+  // The corner's whitened residual r = (pi - uv) / sigma at the current values (false: it does not
+  // project): the outlier gate, the residual statistics and the report's rows.
   const PoseBlock identity_pose;
   PoseBlock ref_T_B_C = identity_pose;  // constant: B is the reference camera's frame
+  auto whitened = [&](const CornerTerm& t, double r[2]) {
+    CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
+    const PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
+    const PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
+    return VisitCameraModel(cam.model.type(), [&](auto model) {
+      return BoardCornerResidual<decltype(model)>(t.p_W, t.uv, t.sigma)(
+          T_W_B.q(), T_W_B.p(), T_B_C.q(), T_B_C.p(), cam.model.params().data(), r);
+    });
+  };
+
+  // The problem, built twice: robust (Huber) on every corner, then L2 on the inliers. By default
+  // one compressed block per camera frame (board_frame_corners.h) over the frame's 7-double board
+  // pose, which Ceres' Schur complement eliminates; options.per_corner_blocks: one autodiff block
+  // per corner over the pose's q and p (the reference the frame blocks are tested against).
+  So3LeftManifold so3;
+  BoardPoseManifold board_pose_manifold;
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::HuberLoss huber(options.huber_whitened);
-  std::vector<ceres::ResidualBlockId> ids;
-  auto build = [&](ceres::Problem& problem, ceres::LossFunction* loss) {
-    ids.assign(terms.size(), nullptr);
-    for (std::size_t i = 0; i < terms.size(); ++i) {
-      const CornerTerm& t = terms[i];
+  auto add_corner_blocks = [&](ceres::Problem& problem, ceres::LossFunction* loss) {
+    for (const CornerTerm& t : terms) {
       if (!t.inlier)
         continue;
       CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
@@ -340,25 +365,82 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       ceres::CostFunction* cost = VisitCameraModel(cam.model.type(), [&](auto model) {
         using Model = decltype(model);
         return static_cast<ceres::CostFunction*>(
-            new ceres::AutoDiffCostFunction<CornerResidual<Model>, 2, 4, 3, 4, 3,
+            new ceres::AutoDiffCostFunction<BoardCornerResidual<Model>, 2, 4, 3, 4, 3,
                                             Model::kNumParams>(
-                new CornerResidual<Model>(t.p_W, t.uv, t.sigma)));
+                new BoardCornerResidual<Model>(t.p_W, t.uv, t.sigma)));
       });
-      ids[i] = problem.AddResidualBlock(cost, loss, T_W_B.q, T_W_B.p, T_B_C.q, T_B_C.p,
-                                        cam.model.mutable_params());
+      problem.AddResidualBlock(cost, loss, T_W_B.q(), T_W_B.p(), T_B_C.q(), T_B_C.p(),
+                               cam.model.mutable_params());
     }
     for (PoseBlock& pose : poses)
-      if (problem.HasParameterBlock(pose.q))
-        problem.SetManifold(pose.q, &so3);
+      if (problem.HasParameterBlock(pose.q()))
+        problem.SetManifold(pose.q(), &so3);
+  };
+  // measurements: the inlier corners, frame by frame (a frame = a run of one camera's terms on
+  // one stamp); the blocks point into it, so it outlives the problem.
+  auto add_frame_blocks = [&](ceres::Problem& problem, double huber_threshold,
+                              std::vector<CornerMeasurement>* measurements) {
+    measurements->clear();
+    std::vector<std::pair<std::size_t, std::size_t>> frames;  // [first, end) in measurements
+    std::vector<std::size_t> frame_term;                      // a term of each frame
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      const CornerTerm& t = terms[i];
+      if (!t.inlier)
+        continue;
+      const bool same = !frame_term.empty() && terms[frame_term.back()].camera == t.camera &&
+                        terms[frame_term.back()].t_ns == t.t_ns;
+      if (!same) {
+        frames.emplace_back(measurements->size(), measurements->size());
+        frame_term.push_back(i);
+      }
+      CornerMeasurement m;
+      m.p_W = t.p_W;
+      m.uv = t.uv;
+      m.sigma_px = t.sigma;
+      measurements->push_back(m);
+      frames.back().second = measurements->size();
+    }
+    ceres::ParameterBlockOrdering* ordering = new ceres::ParameterBlockOrdering;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      const CornerTerm& t = terms[frame_term[f]];
+      CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
+      PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
+      PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
+      problem.AddResidualBlock(
+          MakeBoardFrameCorners(cam.model.type(), measurements->data() + frames[f].first,
+                                static_cast<int>(frames[f].second - frames[f].first),
+                                huber_threshold),
+          nullptr, T_W_B.x, T_B_C.q(), T_B_C.p(), cam.model.mutable_params());
+    }
+    for (PoseBlock& pose : poses)
+      if (problem.HasParameterBlock(pose.x)) {
+        problem.SetManifold(pose.x, &board_pose_manifold);
+        ordering->AddElementToGroup(pose.x, 0);  // eliminated first (Schur complement)
+      }
+    return std::shared_ptr<ceres::ParameterBlockOrdering>(ordering);
+  };
+  std::shared_ptr<ceres::ParameterBlockOrdering> ordering;
+  auto build = [&](ceres::Problem& problem, bool robust,
+                   std::vector<CornerMeasurement>* measurements) {
+    ordering.reset();
+    if (options.per_corner_blocks)
+      add_corner_blocks(problem, robust ? &huber : nullptr);
+    else
+      ordering = add_frame_blocks(problem, robust ? options.huber_whitened : 0.0, measurements);
     for (std::size_t c = 0; c < cams.size(); ++c) {
       CameraState& cam = *cams[c];
       PoseBlock& T_B_C = c == 0 ? ref_T_B_C : cam.T_B_C;
-      if (!problem.HasParameterBlock(T_B_C.q))
+      if (!problem.HasParameterBlock(T_B_C.q()))
         continue;
-      problem.SetManifold(T_B_C.q, &so3);
+      problem.SetManifold(T_B_C.q(), &so3);
+      if (ordering) {
+        ordering->AddElementToGroup(T_B_C.q(), 1);
+        ordering->AddElementToGroup(T_B_C.p(), 1);
+        ordering->AddElementToGroup(cam.model.mutable_params(), 1);
+      }
       if (c == 0 || !cam.config->Estimates(EstimateItem::kExtrinsics)) {
-        problem.SetParameterBlockConstant(T_B_C.q);
-        problem.SetParameterBlockConstant(T_B_C.p);
+        problem.SetParameterBlockConstant(T_B_C.q());
+        problem.SetParameterBlockConstant(T_B_C.p());
       }
       double* theta = cam.model.mutable_params();
       if (!cam.config->Estimates(EstimateItem::kIntrinsics)) {
@@ -378,11 +460,12 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.num_threads = std::max(1, options.num_threads);
+  solver_options.num_threads = threads;
   solver_options.function_tolerance = 1e-10;
   solver_options.parameter_tolerance = 1e-10;
   int iterations = 0;
   auto solve = [&](ceres::Problem& problem, const char* what) {
+    solver_options.linear_solver_ordering = ordering;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     iterations += static_cast<int>(summary.iterations.size());
@@ -395,16 +478,20 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     return summary.final_cost;
   };
 
+  std::vector<report::StageTime> stages{clock.Lap("initialisation")};
   {
+    std::vector<CornerMeasurement> measurements;
     ceres::Problem robust(problem_options);
-    build(robust, &huber);
+    build(robust, true, &measurements);
     solve(robust, "robust");
-    // Outliers per camera against the robust scale of that camera's whitened errors.
+  }
+  // Outliers per camera against the robust scale of that camera's whitened errors.
+  {
     std::vector<std::vector<double>> norms(cams.size());
     std::vector<double> norm(terms.size(), 0.0);
     for (std::size_t i = 0; i < terms.size(); ++i) {
-      double cost = 0.0, r[2];
-      if (!robust.EvaluateResidualBlock(ids[i], false, &cost, r, nullptr))
+      double r[2];
+      if (!whitened(terms[i], r))
         throw std::runtime_error("camera-only calibration: a corner of camera '" +
                                  cams[static_cast<std::size_t>(terms[i].camera)]->config->name +
                                  "' cannot be projected after the robust solve");
@@ -427,35 +514,26 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       log << "[camera-only] " << cam->config->name << ": " << cam->report.outliers
           << " outlier corners removed\n";
 
+  std::vector<CornerMeasurement> measurements;
   ceres::Problem problem(problem_options);
-  build(problem, nullptr);
+  build(problem, false, &measurements);
   const double final_cost = solve(problem, "final");
+  stages.push_back(clock.Lap("solves"));
 
-  // Residuals per camera, raw px and whitened.
+  // Residuals per camera, raw px and whitened; the report's corner rows (report_data.h): the
+  // model at the final values, outliers included.
   std::vector<double> sum_px(cams.size(), 0.0), sum_w(cams.size(), 0.0);
-  for (std::size_t i = 0; i < terms.size(); ++i) {
-    if (!terms[i].inlier)
-      continue;
-    double cost = 0.0, r[2];
-    problem.EvaluateResidualBlock(ids[i], false, &cost, r, nullptr);
-    const auto c = static_cast<std::size_t>(terms[i].camera);
-    const double w2 = r[0] * r[0] + r[1] * r[1];
-    sum_w[c] += w2;
-    sum_px[c] += w2 * terms[i].sigma * terms[i].sigma;
-    ++cams[c]->report.corners;
-  }
-
-  // The report's corner rows (report_data.h): the model at the final values, outliers included.
-  for (std::size_t i = 0; i < terms.size(); ++i) {
-    const CornerTerm& t = terms[i];
+  for (const CornerTerm& t : terms) {
     CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
-    const PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
-    const PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
     double r[2];
-    const bool ok = VisitCameraModel(cam.model.type(), [&](auto model) {
-      return CornerResidual<decltype(model)>(t.p_W, t.uv, t.sigma)(
-          T_W_B.q, T_W_B.p, T_B_C.q, T_B_C.p, cam.model.params().data(), r);
-    });
+    const bool ok = whitened(t, r);
+    if (t.inlier) {
+      const auto c = static_cast<std::size_t>(t.camera);
+      const double w2 = r[0] * r[0] + r[1] * r[1];
+      sum_w[c] += w2;
+      sum_px[c] += w2 * t.sigma * t.sigma;
+      ++cam.report.corners;
+    }
     auto& rows = result.report_data.corners[cam.config->name];
     report::CornerResidual row;
     row.t_ns = t.t_ns;
@@ -470,6 +548,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     row.outlier = !t.inlier;
     rows.push_back(row);
   }
+
+  stages.push_back(clock.Lap("residuals"));
 
   // Marginal covariance of the calibration, board poses marginalised.
   std::vector<CalibrationBlock> calib;
@@ -490,8 +570,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     }
     if (c > 0 && cam.config->Estimates(EstimateItem::kExtrinsics)) {
       CalibrationBlock r, t;
-      r.values = cam.T_B_C.q;
-      t.values = cam.T_B_C.p;
+      r.values = cam.T_B_C.q();
+      t.values = cam.T_B_C.p();
       for (int i = 0; i < 3; ++i) {
         r.names.push_back(ParameterName(name, "R_B_S", i));
         r.unit.push_back(kDeg);
@@ -505,7 +585,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   Observability obs;
   std::map<std::string, double> sigma_of;
   if (!calib.empty()) {
-    const MarginalInformation info = ComputeMarginalInformation(problem, calib);
+    const MarginalInformation info = ComputeMarginalInformation(problem, calib, {}, threads);
     const CalibrationCovariance cov = InvertInformation(info);
     result.report_data.correlation =
         CorrelationFromCovariance(cov.covariance, info.names, cov.undetermined);
@@ -529,6 +609,8 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       warn("some board poses are not determined by their corners (damping " +
            std::to_string(info.nuisance_damping) + ")");
   }
+
+  stages.push_back(clock.Lap("covariance"));
 
   // Results per camera: values, sigma, weak intrinsics, residuals.
   for (std::size_t c = 0; c < cams.size(); ++c) {
@@ -606,6 +688,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
   solver.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   result.rig.solver = solver;
+  log << "[camera-only] " << report::FormatStageTimes(stages) << "\n";
   return result;
 }
 

@@ -479,8 +479,18 @@ class DiscreteProblem {
     CommonRange(&lo, &hi);
     std::vector<double> times;
     if (options_.keyframe_rate_hz > 0.0) {
-      for (double t = lo; t <= hi; t += 1.0 / options_.keyframe_rate_hz)
-        times.push_back(t);
+      // At most one keyframe per base sample: a higher rate holds no preintegrated interval
+      // between keyframes, and 1e300 Hz added 1e-300 s to t forever (killed for its memory).
+      const double sample_rate = static_cast<double>(base_samples_.size() - 1) /
+                                 (base_samples_.back().t - base_samples_.front().t);
+      if (!(options_.keyframe_rate_hz <= sample_rate))
+        throw CalibrationInputError(
+            Fmt("--keyframe-rate %.6g Hz is above the base IMU's sample "
+                "rate (%.1f Hz): at most one keyframe per sample",
+                options_.keyframe_rate_hz, sample_rate));
+      const double step = 1.0 / options_.keyframe_rate_hz;
+      for (int k = 0; lo + k * step <= hi; ++k)
+        times.push_back(lo + k * step);
     } else {
       std::vector<double> frames;
       for (const PreparedCamera& cam : prep_.cameras) {

@@ -9,10 +9,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <future>
 #include <limits>
+#include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -470,6 +474,55 @@ CalibrationCovariance InvertInformation(const MarginalInformation& info,
       continue;
     }
     scaled_cov += (1.0 / lambda) * v * v.transpose();
+  }
+  // A null direction through a lens model's projection parameter (Mei's xi, the double sphere's
+  // xi and alpha, EUCM's alpha and beta, loading above the threshold) carries the camera's other
+  // intrinsics with it, even with loadings below the threshold: the projection parameter trades
+  // with the focal length and the distortion (xi with f and k1), its guess is good to one decimal,
+  // and the estimate sits along the direction wherever the guess put it, which the pseudo-inverse
+  // leaves out of the sigmas. Omni-radtan's k2 loads 0.06-0.07 on the xi-k1-focal direction and
+  // sat at 4-10.8 "sigma" (docs/initialisation.md). Such an intrinsic is undetermined when a
+  // drift of kProjectionNullDrift unit-scaled steps along the direction moves it by more than its
+  // sigma (seeds 38 and 58 drifted 83 and 160: xi 0.074 and 0.136 off). Other null directions
+  // keep the loading rule alone: a yaw's gauges and a pinhole camera's weakly seen distortion
+  // load 0.003-0.03 on well-determined parameters (a principal point, an aux gyro's scale).
+  constexpr double kProjectionNullDrift = 200.0;
+  // The camera of an intrinsic parameter ("" for others) and whether it is a projection
+  // parameter (every model's intrinsics end with fu, fv, pu, pv).
+  std::map<std::string, int> intrinsics_of;
+  const auto parse = [&](int i, int* index) -> std::string {
+    const std::string& name = info.names[static_cast<std::size_t>(i)];
+    const std::size_t dot = name.find('.');
+    if (dot == std::string::npos)
+      return "";
+    if (name.compare(dot, 12, ".intrinsics[") == 0) {
+      *index = std::atoi(name.c_str() + dot + 12);
+      return name.substr(0, dot);
+    }
+    *index = -1;
+    return name.compare(dot, 19, ".distortion_coeffs[") == 0 ? name.substr(0, dot) : "";
+  };
+  for (int i = 0; i < c; ++i) {
+    int index = -1;
+    const std::string camera = parse(i, &index);
+    if (!camera.empty() && index >= 0)
+      intrinsics_of[camera] = std::max(intrinsics_of[camera], index + 1);
+  }
+  for (const int k : out.null_directions) {
+    std::set<std::string> lenses;
+    for (int i = 0; i < c; ++i) {
+      int index = -1;
+      const std::string camera = parse(i, &index);
+      if (!camera.empty() && index >= 0 && index < intrinsics_of[camera] - 4 &&
+          std::abs(out.scaled_eigenvectors(i, k)) > options.loading_threshold)
+        lenses.insert(camera);
+    }
+    for (int i = 0; i < c && !lenses.empty(); ++i) {
+      int index = -1;
+      const double shift = kProjectionNullDrift * out.scaled_eigenvectors(i, k);
+      if (lenses.count(parse(i, &index)) > 0 && shift * shift > scaled_cov(i, i))
+        out.undetermined[static_cast<std::size_t>(i)] = true;
+    }
   }
   out.covariance = unit.asDiagonal() * scaled_cov * unit.asDiagonal();
   for (int i = 0; i < c; ++i) {

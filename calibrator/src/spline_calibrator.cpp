@@ -495,9 +495,7 @@ SplineCalibrationResult Calibrate(const RigConfig& rig,
   SplineCalibratorOptions options = options_in;
   if (options.threads <= 0)
     options.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  if (options.order < 4 || options.order > 6)
-    throw CalibrationInputError("spline order must be 4, 5 or 6, got " +
-                                std::to_string(options.order));
+  CheckOptions(options);
   if (rig.IsCameraOnly())
     throw CalibrationInputError(
         "camera-only rigs are not supported by --method spline yet (the rig has no IMU)");
@@ -575,6 +573,29 @@ SplineCalibrationResult Calibrate(const RigConfig& rig,
 }
 
 }  // namespace
+
+void CheckOptions(const SplineCalibratorOptions& options) {
+  if (options.order < 4 || options.order > 6)
+    throw CalibrationInputError("spline order must be 4, 5 or 6, got " +
+                                std::to_string(options.order));
+  // A bias knot spacing below a nanosecond divided by zero when the bias splines were laid out
+  // (Prepare: SIGFPE); below a millisecond it is knots faster than any IMU's samples.
+  if (!(options.bias_knot_spacing_s >= 1e-3 && std::isfinite(options.bias_knot_spacing_s)))
+    throw CalibrationInputError("bias knot spacing (--bias-knot-spacing) must be >= 0.001 s, got " +
+                                Fmt("%g", options.bias_knot_spacing_s));
+  // 0 means "from the motion's bandwidth"; a negative spacing meant it as well, silently, and
+  // 1e-6 s laid out millions of knots until the process was killed for its memory.
+  if (!(options.knot_spacing_s == 0.0 ||
+        (options.knot_spacing_s >= 1e-3 && std::isfinite(options.knot_spacing_s))))
+    throw CalibrationInputError(
+        "trajectory knot spacing (--knot-spacing) must be 0 (from the motion's bandwidth) or "
+        ">= 0.001 s, got " +
+        Fmt("%g", options.knot_spacing_s));
+  // Ceres rejects it only at the first solve, which then reads as a diverged solve.
+  if (options.max_iterations < 0)
+    throw CalibrationInputError("max iterations (--max-iterations) must be >= 0, got " +
+                                std::to_string(options.max_iterations));
+}
 
 SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
                                         const std::map<std::string, SensorData>& data,

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <thread>
 
+#include "ctcal/report/report.h"
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/parallel_for.h"
 
@@ -109,6 +110,11 @@ class TableFile {
     }
     char buf[64];
     const auto res = std::to_chars(buf, buf + sizeof buf, x, format, precision);
+    if (res.ec != std::errc()) {
+      // "%.3f" of a number beyond 1e60 does not fit: exact instead (the buffer holds no text).
+      Exact(x);
+      return x;
+    }
     double back = x;
     std::from_chars(buf, res.ptr, back);
     text_.append(buf, res.ptr);
@@ -578,25 +584,58 @@ ReportData LoadReportData(const std::string& out_dir, const std::vector<std::str
   return d;
 }
 
-ReportData WriteReportData(const std::string& out_dir, ReportData d, int threads) {
-  CreateDataDir(out_dir);
-  // The largest tables first, so that the threads finish together.
+namespace {
+
+// The jobs of the tables the report draws rounded (corner residuals, bias tracks: rounded in place
+// to their written digits) and of those written exactly (the rest), the largest first, so that
+// the threads finish together.
+std::vector<std::function<void()>> RoundedTableJobs(const std::string& out_dir, ReportData* d) {
   std::vector<std::function<void()>> jobs;
-  for (auto& [s, rows] : d.corners)
+  for (auto& [s, rows] : d->corners)
     jobs.emplace_back([&, &s = s, &rows = rows] { WriteCorners(out_dir, s, &rows); });
+  for (auto& [s, track] : d->bias)
+    jobs.emplace_back([&, &s = s, &track = track] { WriteBias(out_dir, s, &track); });
+  return jobs;
+}
+
+std::vector<std::function<void()>> ExactTableJobs(const std::string& out_dir, const ReportData& d) {
+  std::vector<std::function<void()>> jobs;
   for (const auto& [s, rows] : d.gyro)
     jobs.emplace_back([&, &s = s, &rows = rows] { WriteGyroSamples(out_dir, s, rows); });
   for (const auto& [s, rows] : d.accel)
     jobs.emplace_back([&, &s = s, &rows = rows] { WriteAccelSamples(out_dir, s, rows); });
-  for (auto& [s, track] : d.bias)
-    jobs.emplace_back([&, &s = s, &track = track] { WriteBias(out_dir, s, &track); });
   if (!d.trajectory.empty())
     jobs.emplace_back([&] { WriteTrajectory(out_dir, d.trajectory); });
   if (!d.correlation.names.empty())
     jobs.emplace_back([&] { WriteCorrelation(out_dir, d.correlation); });
   jobs.emplace_back([&] { WriteRunInfo(out_dir, d.run_info); });
+  return jobs;
+}
+
+void RunJobs(const std::vector<std::function<void()>>& jobs, int threads) {
   ParallelFor(Workers(threads), jobs.size(), [&](size_t j) { jobs[j](); });
+}
+
+}  // namespace
+
+ReportData WriteReportData(const std::string& out_dir, ReportData d, int threads) {
+  CreateDataDir(out_dir);
+  std::vector<std::function<void()>> jobs = RoundedTableJobs(out_dir, &d);
+  for (auto& job : ExactTableJobs(out_dir, d))
+    jobs.push_back(std::move(job));
+  RunJobs(jobs, threads);
   return d;
+}
+
+ReportData WriteRoundedReportData(const std::string& out_dir, ReportData d, int threads) {
+  CreateDataDir(out_dir);
+  RunJobs(RoundedTableJobs(out_dir, &d), threads);
+  return d;
+}
+
+void WriteExactReportData(const std::string& out_dir, const ReportData& d, int threads) {
+  CreateDataDir(out_dir);
+  RunJobs(ExactTableJobs(out_dir, d), threads);
 }
 
 }  // namespace ctcal::report

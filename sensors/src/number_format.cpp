@@ -42,7 +42,8 @@ bool ParseDouble(std::string_view s, double* x) {
   const char* begin = s.data() + (!s.empty() && s[0] == '+' ? 1 : 0);
   const char* end = s.data() + s.size();
   double value = 0.0;
-  if (!s.empty()) {
+  // from_chars takes a '-' of its own: "+-1" is no number (it read as -1).
+  if (!s.empty() && !(begin != s.data() && begin != end && *begin == '-')) {
     const auto res = std::from_chars(begin, end, value);
     if (res.ec == std::errc() && res.ptr == end) {
       *x = value;

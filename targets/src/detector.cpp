@@ -1116,6 +1116,25 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
   return result;
 }
 
+namespace {
+
+// The final estimate of a corner refined with a capture window: refined again from there with the
+// smaller window `half_window` (the lens' outward pull grows with the window's area, the noise
+// falls only with its width; docs/targets.md). A corner the final window moves by more than 0.3
+// px keeps the capture estimate (on TUM-VI's blurred fisheye rim the two differ by up to that).
+void RefineFinal(const cv::Mat& gray, double noise_sigma, int half_window, DetectedCorner* corner) {
+  constexpr double kMaxMovePx = 0.3;
+  Eigen::Vector2d uv = corner->uv;
+  double sigma = 0.0;
+  if (RefineCorner(gray, half_window, &uv, &sigma, noise_sigma) &&
+      (uv - corner->uv).norm() <= kMaxMovePx) {
+    corner->uv = uv;
+    corner->sigma = sigma;
+  }
+}
+
+}  // namespace
+
 // Every accepted tag corner refined once more from its estimate with the final window
 // (DetectorOptions::tag_window_borders, smaller than the capture window): the lens' outward pull
 // grows with the window's area while the noise only falls with its width (docs/targets.md). The
@@ -1125,7 +1144,6 @@ DetectionResult Detector::Detect(const cv::Mat& image) const {
 // corner the final window moves by more than that keeps its capture estimate.
 void Detector::RefineTagCorners(const cv::Mat& gray, double noise_sigma,
                                 DetectionResult* result) const {
-  constexpr double kMaxMovePx = 0.3;
   const int border = board_.config().black_tag_border;
   const int cells = 6 + 2 * border;
   std::vector<DetectedCorner>& corners = result->corners;  // sorted by id
@@ -1149,15 +1167,8 @@ void Detector::RefineTagCorners(const cv::Mat& gray, double noise_sigma,
     const int fine = TagCornerHalfWindow(border, bit_px, options_.tag_window_borders);
     if (fine == TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders))
       continue;
-    for (DetectedCorner* corner : c) {
-      Eigen::Vector2d uv = corner->uv;
-      double sigma = 0.0;
-      if (RefineCorner(gray, fine, &uv, &sigma, noise_sigma) &&
-          (uv - corner->uv).norm() <= kMaxMovePx) {
-        corner->uv = uv;
-        corner->sigma = sigma;
-      }
-    }
+    for (DetectedCorner* corner : c)
+      RefineFinal(gray, noise_sigma, fine, corner);
   }
 }
 
@@ -1349,6 +1360,94 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
   return result;
 }
 
+namespace {
+
+// Puts findChessboardCornersSB's corners (row by row, `cols` per row) into the board's order and
+// checks that they are this board's inner corners; false if not. SB orders the grid by the image,
+// not by the print: of 32 rendered equidistant views of a 7 x 6 board it returned 4 turned by a
+// half (the earlier check sampled two squares through one homography of the whole board, a
+// square off under this distortion) and 2 with a row of the board's outer edge against the white
+// paper in place of a row of inner corners (a grid of the right size, one row of real corners
+// short; docs/targets.md). What settles it is the print itself: every cell of the grid, the outer
+// ring of squares included, must be black where the board prints black.
+// - Handedness: a camera looking at the printed side sees the board's x (the row index) turned
+//   counter-clockwise by 90 deg from its y (the column index) in the image (v down), whatever
+//   the roll: the cross product of the column step and the row step is positive. SB does not know
+//   which side is printed; a grid it lists mirrored gets each row reversed.
+// - A half turn maps cell (i, j) onto (rows - 2 - i, cols - 2 - j), which changes its colour when
+//   rows + cols is odd: the reading whose black cells are darker is the board's. When rows + cols
+//   is even the half turn looks the same and OpenCV's order stands (as in Kalibr).
+// Each cell is read at its centre, from its nearest corner and that corner's steps to its row and
+// column neighbours (local: a homography through the whole board misses by a square on a fisheye).
+bool OrderCheckerboardCorners(const cv::Mat& gray, int rows, int cols,
+                              std::vector<cv::Point2f>* found) {
+  const auto at = [&](int r, int c) {
+    const cv::Point2f& p = (*found)[static_cast<size_t>(r * cols + c)];
+    return Eigen::Vector2d(p.x, p.y);
+  };
+  double handedness = 0.0;
+  for (int r = 0; r + 1 < rows; ++r) {
+    for (int c = 0; c + 1 < cols; ++c) {
+      const Eigen::Vector2d col_step = at(r, c + 1) - at(r, c), row_step = at(r + 1, c) - at(r, c);
+      handedness += col_step.x() * row_step.y() - col_step.y() * row_step.x();
+    }
+  }
+  if (handedness < 0.0) {
+    for (int r = 0; r < rows; ++r)
+      std::reverse(found->begin() + r * cols, found->begin() + (r + 1) * cols);
+  }
+  // Cell (i, j), i in -1..rows-1, j in -1..cols-1, lies between corner rows i, i+1 and columns
+  // j, j+1; the board prints it black when i + j is even (the square before corner 0 is black).
+  struct Cell {
+    double intensity;
+    bool black;
+  };
+  std::vector<Cell> cells;
+  for (int i = -1; i < rows; ++i) {
+    for (int j = -1; j < cols; ++j) {
+      const int r = std::clamp(i, 0, rows - 1), c = std::clamp(j, 0, cols - 1);
+      // Cells of the outer ring are read a quarter square out: printed boards are often cut
+      // inside their outer squares (opencv-doc's left*.jpg); paper beyond a false row is paper
+      // at any distance.
+      const double toward_row = (i >= r ? 1.0 : -1.0) * (i < 0 || i == rows - 1 ? 0.5 : 1.0);
+      const double toward_col = (j >= c ? 1.0 : -1.0) * (j < 0 || j == cols - 1 ? 0.5 : 1.0);
+      const Eigen::Vector2d row_step =
+          r + 1 < rows ? at(r + 1, c) - at(r, c) : at(r, c) - at(r - 1, c);
+      const Eigen::Vector2d col_step =
+          c + 1 < cols ? at(r, c + 1) - at(r, c) : at(r, c) - at(r, c - 1);
+      const Eigen::Vector2d centre =
+          at(r, c) + 0.5 * toward_row * row_step + 0.5 * toward_col * col_step;
+      const double intensity = SampleBilinear(gray, centre.x(), centre.y());
+      if (intensity >= 0.0)  // cells beyond the image are not read
+        cells.push_back({intensity, (i + j) % 2 == 0});
+    }
+  }
+  double black_minus_white = 0.0;
+  for (const Cell& cell : cells)
+    black_minus_white += cell.black ? cell.intensity : -cell.intensity;
+  if ((rows + cols) % 2 == 1 && black_minus_white > 0.0) {
+    std::reverse(found->begin(), found->end());
+    for (Cell& cell : cells)
+      cell.black = !cell.black;
+  }
+  // Every cell on its side of the midpoint between the black and the white cells' mean
+  // intensities: a row of paper taken for squares reads white where black is printed.
+  double black_sum = 0.0, white_sum = 0.0;
+  int blacks = 0;
+  for (const Cell& cell : cells) {
+    (cell.black ? black_sum : white_sum) += cell.intensity;
+    blacks += cell.black;
+  }
+  const int whites = static_cast<int>(cells.size()) - blacks;
+  if (blacks == 0 || whites == 0)
+    return false;
+  const double threshold = 0.5 * (black_sum / blacks + white_sum / whites);
+  return std::all_of(cells.begin(), cells.end(),
+                     [&](const Cell& cell) { return cell.black == (cell.intensity < threshold); });
+}
+
+}  // namespace
+
 DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const {
   DetectionResult result;
   const int rows = board_.rows();
@@ -1360,34 +1459,12 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
     return result;
   if (static_cast<int>(found.size()) != rows * cols)
     return result;
-  // A board with an odd number of squares along one side looks the same after a half turn, so
-  // OpenCV may return it from either end. The square before corner 0 is black (Board); the one
-  // after the last corner is black only if rows + cols is even. When they differ, sample both.
-  if ((rows + cols) % 2 == 1) {
-    std::vector<cv::Point2f> board_xy;
-    for (int id = 0; id < rows * cols; ++id) {
-      const Eigen::Vector3d& p = board_.Corner(id);
-      board_xy.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
-    }
-    const cv::Mat H = cv::findHomography(board_xy, found);
-    if (!H.empty()) {
-      const double rs = board_.config().row_spacing_m;
-      const double cs = board_.config().col_spacing_m;
-      std::vector<cv::Point2f> centres = {
-          {static_cast<float>(-0.5 * rs), static_cast<float>(-0.5 * cs)},
-          {static_cast<float>((rows - 0.5) * rs), static_cast<float>((cols - 0.5) * cs)}};
-      std::vector<cv::Point2f> pixels;
-      cv::perspectiveTransform(centres, pixels, H);
-      auto intensity = [&](const cv::Point2f& p) {
-        const int x = std::clamp(static_cast<int>(std::lround(p.x)), 0, gray.cols - 1);
-        const int y = std::clamp(static_cast<int>(std::lround(p.y)), 0, gray.rows - 1);
-        return static_cast<int>(gray.at<uint8_t>(y, x));
-      };
-      if (intensity(pixels[0]) > intensity(pixels[1]))
-        std::reverse(found.begin(), found.end());
-    }
+  if (!OrderCheckerboardCorners(gray, rows, cols, &found)) {
+    result.rejected.push_back({-1, RejectReason::kNotThisBoard});
+    return result;
   }
-  // Window: 40 % of the smallest distance between neighbouring corners.
+  // Capture window: 40 % of the smallest distance between neighbouring corners; the final
+  // estimate with square_window_fraction of it (the lens' pull, RefineFinal).
   double min_step = 1e9;
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c + 1 < cols; ++c) {
@@ -1396,6 +1473,8 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
     }
   }
   const int half_window = std::clamp(static_cast<int>(0.4 * min_step), 2, 12);
+  const int final_window =
+      std::clamp(static_cast<int>(options_.square_window_fraction * min_step), 2, 12);
   // findChessboardCornersSB's corners are already sub-pixel but its outer-row corners are off by
   // up to ~1.5 px on real photos (opencv-doc's left*.jpg), which the refinement corrects; the
   // next X-junction is a whole square away, so a fifth of a square is still the same corner.
@@ -1412,6 +1491,8 @@ DetectionResult Detector::DetectCheckerboard(const cv::Mat& gray, double noise_s
           (uv - corner.uv).norm() <= max_jump) {
         corner.uv = uv;
         corner.sigma = sigma;  // noise only; Detect adds the view's model error
+        if (final_window < half_window)
+          RefineFinal(gray, noise_sigma, final_window, &corner);
       } else {
         result.rejected.push_back({id, RejectReason::kRefinementJump});
         continue;
@@ -1482,6 +1563,8 @@ DetectionResult Detector::DetectCharuco(const cv::Mat& gray, double noise_sigma)
   const double margin_sq =
       0.5 * (config.square_length_m - config.marker_length_m) / config.square_length_m;
   const int half_window = std::clamp(static_cast<int>(margin_sq * square_px), 2, 12);
+  const int final_window =
+      std::clamp(static_cast<int>(options_.square_window_fraction * square_px), 2, 12);
   const double max_jump = std::max(options_.max_refinement_jump_px, 0.2 * square_px);
   const double margin = options_.min_border_distance_px;
   for (size_t i = 0; i < charuco_ids.size(); ++i) {
@@ -1504,6 +1587,8 @@ DetectionResult Detector::DetectCharuco(const cv::Mat& gray, double noise_sigma)
       }
       corner.uv = uv;
       corner.sigma = sigma;  // noise only; Detect adds the view's model error
+      if (final_window < half_window)
+        RefineFinal(gray, noise_sigma, final_window, &corner);
     }
     result.corners.push_back(corner);
   }

@@ -20,16 +20,17 @@ const DetectedCorner* FindCorner(const std::vector<DetectedCorner>& sorted, int 
 }
 
 // Radius (board metres) around a corner that holds only the junction's own two edges; the
-// detectors' first refinements use the same fractions of the image's features.
+// detectors' final refinements use the same fractions of the image's features.
 double CleanRadiusM(const Board& board, const DetectorOptions& options) {
   const TargetConfig& config = board.config();
   switch (board.type()) {
     case TargetType::kAprilGrid:
       return options.tag_window_borders * config.black_tag_border * board.TagBitSize();
     case TargetType::kCheckerboard:
-      return 0.4 * std::min(config.row_spacing_m, config.col_spacing_m);
+      return options.square_window_fraction * std::min(config.row_spacing_m, config.col_spacing_m);
     case TargetType::kCharuco:
-      return 0.5 * (config.square_length_m - config.marker_length_m);
+      return std::min(0.5 * (config.square_length_m - config.marker_length_m),
+                      options.square_window_fraction * config.square_length_m);
   }
   return 0.0;
 }

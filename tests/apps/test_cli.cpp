@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "cli_test_util.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -74,6 +75,28 @@ TEST_F(Cli, BadUsageExitsTwoWithOneLineOnStderr) {
   const Result none = RunCtcal("");
   EXPECT_EQ(none.code, 2);
   EXPECT_EQ(Lines(none.err), 1) << none.err;
+}
+
+// Option values no calibration can run with are refused before any file is read (the rig and
+// data named here do not exist): one line naming the option. A bias knot spacing of 0 ended in
+// SIGFPE after the initialisation, a negative knot spacing silently meant "automatic", and a
+// negative iteration count read as a diverged solve.
+TEST_F(Cli, CalibrateRefusesBadOptionValuesBeforeReadingData) {
+  const std::string files = "calibrate --rig no_such_rig.yaml --data no_such_data --out out ";
+  const std::pair<const char*, const char*> cases[] = {
+      {"--bias-knot-spacing 0", "--bias-knot-spacing"},
+      {"--bias-knot-spacing nan", "--bias-knot-spacing"},
+      {"--knot-spacing -0.1", "--knot-spacing"},
+      {"--knot-spacing 1e-6", "--knot-spacing"},
+      {"--max-iterations -1", "--max-iterations"},
+      {"--order 3", "order must be 4, 5 or 6"}};
+  for (const auto& [option, says] : cases) {
+    const Result r = RunCtcal(files + option);
+    EXPECT_EQ(r.code, 2) << option;
+    EXPECT_EQ(Lines(r.err), 1) << option << ": " << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << option << ": " << r.err;
+    EXPECT_EQ(r.err.find("no_such"), std::string::npos) << option << ": " << r.err;
+  }
 }
 
 TEST_F(Cli, CompareReportsAMissingOrBadFileInOneLine) {

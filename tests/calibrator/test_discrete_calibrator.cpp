@@ -98,6 +98,26 @@ TEST(DiscreteCalibrator, KeyframesFollowCameraOffsetsGuessedFifteenMillisecondsO
       stuck.num_kinematic_corners, stuck.num_geodesic_corners, agree.worst, agree.compared);
 }
 
+// A keyframe rate above the base IMU's sample rate is one CalibrationInputError naming the
+// option: 1e300 Hz added 1e-300 s to the keyframe time forever, until the process was killed for
+// its memory.
+TEST(DiscreteCalibrator, KeyframeRateAboveTheImuRateIsNamed) {
+  const SimulatedRecording r = SimulateTable4(sim::Scenario::kFull, 3.0, 5);
+  for (const double rate : {1e300, 1e4}) {
+    DiscreteCalibratorOptions options;
+    options.threads = 2;
+    options.keyframe_rate_hz = rate;
+    std::string what;
+    try {
+      CalibrateDiscrete(r.guess, r.data, options, [](const std::string&) {});
+    } catch (const CalibrationInputError& e) {
+      what = e.what();
+    }
+    EXPECT_NE(what.find("--keyframe-rate"), std::string::npos) << rate << ": " << what;
+    EXPECT_NE(what.find("sample rate (250."), std::string::npos) << rate << ": " << what;
+  }
+}
+
 }  // namespace
 }  // namespace ctcal
 

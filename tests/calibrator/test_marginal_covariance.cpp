@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "ctcal/calibrator/marginal_covariance.h"
@@ -166,6 +167,47 @@ TEST(MarginalCovariance, NullDirectionMarksOnlyItsParameters) {
   EXPECT_TRUE(std::isinf(cov.sigma(0)));
   EXPECT_FALSE(cov.undetermined[2]);
   EXPECT_TRUE(std::isfinite(cov.sigma(2)));
+}
+
+// A null direction through a lens' projection parameter carries the camera's other intrinsics
+// along, even below the loading threshold: here the data see b and c - L a only, so along
+// (1, 0, L) a moves freely and c with it by L a (omni-radtan's k2 on the xi-k1-focal direction
+// loads 0.06-0.07, docs/initialisation.md). With L = 0.05 an estimate whose a is off by 1 has c
+// off by 0.05, 5 of c's pseudo-inverse sigmas: c must be undetermined when a is an omni camera's
+// xi and c its k2, b (no loading) not. A null direction with a tiny eigenvalue (1e-14 of the
+// largest, below the null rule) gives the same answers; L = 1e-6 leaves c determined (a drift of
+// 200 moves it by 0.02 sigma), and so does a motion gauge (a leads, not an intrinsic) with L =
+// 0.05: the loading rule alone.
+TEST(MarginalCovariance, LensNullDirectionCarriesTheOtherIntrinsics) {
+  // cam0 is an omni camera: intrinsics [xi, fu, fv, pu, pv], xi its projection parameter.
+  const std::vector<std::string> lens = {"cam0.intrinsics[0]", "cam0.intrinsics[4]",
+                                         "cam0.distortion_coeffs[1]"};
+  const std::vector<std::string> gauge = {"imu0.R_B_S[2]", "cam0.t_B_S[0]", "cam0.intrinsics[3]"};
+  for (const double loading : {0.05, 1e-6}) {
+    for (const double weak : {0.0, 1e-5}) {
+      for (const auto* names : {&lens, &gauge}) {
+        // Rows of J: 100 b, 100 (c - loading a) and weak (a + loading c).
+        Eigen::Matrix3d J;
+        J << 0.0, 100.0, 0.0, -100.0 * loading, 0.0, 100.0, weak, 0.0, loading * weak;
+        MarginalInformation info;
+        info.information = J.transpose() * J;
+        info.names = *names;
+        info.unit = Eigen::Vector3d::Ones();
+        const CalibrationCovariance cov = InvertInformation(info);
+        const std::string what =
+            (*names)[2] + ", loading " + std::to_string(loading) + ", weak " + std::to_string(weak);
+        ASSERT_EQ(cov.null_directions.size(), 1u) << what;
+        const Eigen::VectorXd v = cov.scaled_eigenvectors.col(cov.null_directions[0]);
+        EXPECT_NEAR(std::abs(v(2)), loading / std::sqrt(1.0 + loading * loading), 1e-9) << what;
+        EXPECT_TRUE(cov.undetermined[0]) << what;
+        EXPECT_FALSE(cov.undetermined[1]) << what;
+        EXPECT_NEAR(cov.sigma(1), 0.01, 1e-12) << what;
+        const bool carried = names == &lens && loading > 1e-3;
+        EXPECT_EQ(cov.undetermined[2], carried) << what;
+        EXPECT_EQ(std::isinf(cov.sigma(2)), carried) << what;
+      }
+    }
+  }
 }
 
 TEST(MarginalCovariance, PriorsDetermineANullDirectionUnlessExcluded) {

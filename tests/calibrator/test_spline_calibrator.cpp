@@ -9,9 +9,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/compare.h"
@@ -237,6 +239,30 @@ TEST(SplineCalibrator, NonOverlappingTimeRangesAreNamed) {
   const std::string what = InputErrorOf([&] { CalibrateSpline(l.rig, l.data, {}, Quiet()); });
   EXPECT_NE(what.find("sensors.imu1"), std::string::npos) << what;
   EXPECT_NE(what.find("do not overlap"), std::string::npos) << what;
+}
+
+// Options no calibration can run with are one CalibrationInputError naming the option, before
+// any work: a bias knot spacing of 0 divided by zero when the bias splines were laid out (SIGFPE).
+TEST(SplineCalibrator, OptionsItCannotRunWithAreNamed) {
+  test::Recording l = test::LoadRecording(SimulatedData(12, 4.0));
+  const std::pair<std::function<void(SplineCalibratorOptions*)>, const char*> cases[] = {
+      {[](SplineCalibratorOptions* o) { o->bias_knot_spacing_s = 0.0; }, "--bias-knot-spacing"},
+      {[](SplineCalibratorOptions* o) { o->bias_knot_spacing_s = 1e-12; }, "--bias-knot-spacing"},
+      {[](SplineCalibratorOptions* o) { o->knot_spacing_s = -0.05; }, "--knot-spacing"},
+      {[](SplineCalibratorOptions* o) { o->knot_spacing_s = 1e-6; }, "--knot-spacing"},
+      {[](SplineCalibratorOptions* o) { o->knot_spacing_s = std::nan(""); }, "--knot-spacing"},
+      {[](SplineCalibratorOptions* o) { o->max_iterations = -1; }, "--max-iterations"},
+      {[](SplineCalibratorOptions* o) { o->order = 7; }, "order must be 4, 5 or 6"}};
+  for (const auto& [breaks, says] : cases) {
+    SplineCalibratorOptions options;
+    breaks(&options);
+    std::vector<std::string> lines;
+    const std::string what = InputErrorOf([&] {
+      CalibrateSpline(l.rig, l.data, options, [&](const std::string& s) { lines.push_back(s); });
+    });
+    EXPECT_NE(what.find(says), std::string::npos) << what;
+    EXPECT_TRUE(lines.empty()) << says << ": logged " << lines.front();
+  }
 }
 
 // A stated noise so small that the whitened cost overflows: the solve must stop with one

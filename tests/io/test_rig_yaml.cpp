@@ -111,7 +111,7 @@ RigConfig RandomResult(std::uint64_t seed) {
   gyro.type = SensorType::kGyro;
   gyro.gyro_model = GyroModel::kFull;
   gyro.D_w = RandomVector(rng, 9);
-  gyro.noise = imu0.noise;
+  gyro.noise = rig.sensors[0].noise;  // imu0 dangles: the push_backs above reallocated
   gyro.noise.accelerometer_noise_density = 0.0;
   gyro.noise.accelerometer_random_walk = 0.0;
   gyro.T_B_S = RandomPose(rng);
@@ -179,7 +179,7 @@ TEST(NumberFormat, ShortestExactWithADotAndYamlNonFinites) {
   EXPECT_TRUE(ParseDouble(".Inf", &y) && std::isinf(y) && y > 0);
   EXPECT_TRUE(ParseDouble("-.INF", &y) && std::isinf(y) && y < 0);
   EXPECT_TRUE(ParseDouble("+1.5e3", &y) && y == 1500.0);
-  for (const char* bad : {"", "1.2.3", "1e", "abc", "1,5", " 1", "1e999"})
+  for (const char* bad : {"", "1.2.3", "1e", "abc", "1,5", " 1", "1e999", "+-1", "+", "+-.inf"})
     EXPECT_FALSE(ParseDouble(bad, &y)) << bad;
 }
 

@@ -509,6 +509,23 @@ TEST_F(ReportTest, WrittenDataAreWhatTheFilesHoldToTheBit) {
   EXPECT_EQ(read.run_info, d.run_info);
 }
 
+// A corner coordinate whose "%.3f" does not fit the writer's buffer (1e60 and beyond: a diverged
+// prediction handed to the public writer) is written exactly, as the non-finite values are; the
+// writer appended its unwritten buffer before.
+TEST_F(ReportTest, CornerCoordinatesTooLongForFixedPointAreWrittenExactly) {
+  ReportData d;
+  CornerResidual c{7, 0, 1, 1e300, -2.5e61, 1e300, 0.5, 1.0, false};
+  d.corners["cam0"] = {c};
+  const ReportData stored = WriteReportData(dir_, d, 1);
+  const std::vector<CornerResidual> read = ReadCornerResiduals(CornersPath(dir_, "cam0"));
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_EQ(read[0].u, c.u);
+  EXPECT_EQ(read[0].v, c.v);
+  EXPECT_EQ(stored.corners.at("cam0")[0].u, c.u);
+  EXPECT_EQ(read[0].du, 1e300);  // "%.7g" fits
+  EXPECT_EQ(read[0].dv, 0.5);
+}
+
 // `ctcal calibrate` renders the report from the data it has just written, `ctcal report` from the
 // folder: the same HTML, byte for byte.
 TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
@@ -528,6 +545,44 @@ TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
   const std::string from_memory = Slurp(dir_ + "/report.html");
   RenderReport(dir_, opt);
   EXPECT_EQ(from_memory, Slurp(dir_ + "/report.html"));
+}
+
+// `ctcal calibrate` writes the report data in two halves, the exact tables while it draws the
+// report: the same files as WriteReportData, byte for byte, and the same data drawn.
+TEST_F(ReportTest, WritingInTwoHalvesWritesTheSameFilesAndData) {
+  test::MakeSyntheticOut(dir_);
+  std::vector<std::string> ignored;
+  std::vector<std::string> names;
+  for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
+    names.push_back(s.name);
+  ReportData data = LoadReportData(dir_, names);
+  for (CornerResidual& c : data.corners.at("cam0"))  // unrounded again: the writers round
+    c.du += 1e-9;
+  const std::string whole = dir_ + "/whole", halves = dir_ + "/halves";
+  const ReportData a = WriteReportData(whole, data, 2);
+  const ReportData b = WriteRoundedReportData(halves, data, 2);
+  WriteExactReportData(halves, b, 1);
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(ReportDataDir(whole)))
+    files.insert(e.path().filename().string());
+  std::set<std::string> files_b;
+  for (const auto& e : fs::directory_iterator(ReportDataDir(halves)))
+    files_b.insert(e.path().filename().string());
+  EXPECT_EQ(files, files_b);
+  // corners, bias, gyro, accel, trajectory, correlation, run info: both halves have files.
+  EXPECT_GE(files.size(), 7u);
+  for (const std::string& f : files)
+    EXPECT_EQ(Slurp(ReportDataDir(whole) + "/" + f), Slurp(ReportDataDir(halves) + "/" + f)) << f;
+  ASSERT_EQ(a.corners.at("cam0").size(), b.corners.at("cam0").size());
+  for (size_t i = 0; i < a.corners.at("cam0").size(); ++i) {
+    const CornerResidual &x = a.corners.at("cam0")[i], &y = b.corners.at("cam0")[i];
+    ASSERT_EQ(std::memcmp(&x.du, &y.du, sizeof x.du), 0) << i;
+    ASSERT_EQ(std::memcmp(&x.u, &y.u, sizeof x.u), 0) << i;
+  }
+  ASSERT_EQ(a.bias.size(), b.bias.size());
+  for (const auto& [sensor, track] : a.bias)
+    for (size_t i = 0; i < track.gyro.size(); ++i)
+      ASSERT_EQ(track.gyro[i].b, b.bias.at(sensor).gyro[i].b) << sensor << " " << i;
 }
 
 }  // namespace

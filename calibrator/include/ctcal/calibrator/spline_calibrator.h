@@ -134,6 +134,11 @@ struct SplineCalibrationResult {
 // Receives every progress line (stages, iterations with their cost, warnings).
 using CalibrationLog = std::function<void(const std::string&)>;
 
+// Throws CalibrationInputError naming the option for options no calibration can run with (the
+// order, knot spacings, iterations); CalibrateSpline checks them first, a command line can check
+// them before it reads any data.
+void CheckOptions(const SplineCalibratorOptions& options);
+
 // Throws CalibrationInputError / CalibrationFailure as above.
 SplineCalibrationResult CalibrateSpline(const RigConfig& rig,
                                         const std::map<std::string, SensorData>& data,

@@ -87,4 +87,13 @@ ReportOutput RenderReport(const std::string& out_dir, const ReportOptions& optio
 ReportOutput RenderReport(const std::string& out_dir, const ReportData& data,
                           const ReportOptions& options = {});
 
+// WriteReportData (report_data.h) in two halves, for a caller that renders while the second half
+// is written (docs/performance.md step 7h). WriteRoundedReportData writes the tables the report
+// draws rounded (corner residuals, bias tracks) and returns `data` with them as the files hold
+// them; WriteExactReportData writes the others (inertial samples, trajectory, correlation, run
+// info), whose values the files hold exactly, so RenderReport may draw from `data` meanwhile.
+// Together they write the files WriteReportData writes.
+ReportData WriteRoundedReportData(const std::string& out_dir, ReportData data, int threads = 0);
+void WriteExactReportData(const std::string& out_dir, const ReportData& data, int threads = 0);
+
 }  // namespace ctcal::report
