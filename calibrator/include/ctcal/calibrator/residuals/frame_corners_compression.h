@@ -85,14 +85,23 @@ struct HeldCornerAt {
   CornerMeasurement operator()(int i) const { return MeasurementOf(corners[i], board_W); }
 };
 
+// The M corners at `corners` (owned by the caller).
+template <class Model>
+bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double* params,
+                          const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
+                          double huber_threshold, double* residuals,
+                          Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
+  return CompressFrameCornersOf<Model>(M, OwnedCornerAt{corners}, params, R_C_W, t_C_W,
+                                       huber_threshold, residuals, R);
+}
+
 template <class Model>
 bool CompressFrameCorners(const std::vector<CornerMeasurement>& corners, const double* params,
                           const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
                           double huber_threshold, double* residuals,
                           Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
-  return CompressFrameCornersOf<Model>(static_cast<int>(corners.size()),
-                                       OwnedCornerAt{corners.data()}, params, R_C_W, t_C_W,
-                                       huber_threshold, residuals, R);
+  return CompressFrameCorners<Model>(corners.data(), static_cast<int>(corners.size()), params,
+                                     R_C_W, t_C_W, huber_threshold, residuals, R);
 }
 
 }  // namespace ctcal
