@@ -142,8 +142,10 @@ BENCHMARK(BM_Calibrate)
 // by a child process (its memory is not this process') into a temporary folder, unless
 // CTCAL_BENCH_LONG_DATA names a folder `ctcal simulate` wrote. peak_rss_mb is the process' peak
 // (getrusage), so run each case alone (one --benchmark_filter per process):
-//   build/bench/bench_calibrate --benchmark_filter='BM_LongRecordingMemory/inertial_K:0'
-// arg inertial_K: the base IMU's run length (0: the rule of InertialBlockSegments).
+//   build/bench/bench_calibrate
+//   --benchmark_filter='BM_LongRecordingMemory/inertial_K:0/row_groups:1'
+// arg inertial_K: the base IMU's run length (0: the rule of InertialBlockSegments); row_groups:
+// SplineCalibratorOptions::split_inertial_rows (docs/performance.md step 7g).
 void BM_LongRecordingMemory(benchmark::State& state) {
   std::string dir;
   if (const char* env = std::getenv("CTCAL_BENCH_LONG_DATA")) {
@@ -176,6 +178,7 @@ void BM_LongRecordingMemory(benchmark::State& state) {
   SplineCalibratorOptions options;
   options.threads = 2;
   options.inertial_block_segments = static_cast<int>(state.range(0));
+  options.split_inertial_rows = state.range(1) != 0;
   SplineCalibrationResult result;
   for (auto _ : state) {
     const RigConfig rig = LoadRig(dir + "/rig.yaml");
@@ -186,9 +189,10 @@ void BM_LongRecordingMemory(benchmark::State& state) {
   SetRunCounters(result, &state);
 }
 BENCHMARK(BM_LongRecordingMemory)
-    ->ArgNames({"inertial_K"})
-    ->Args({0})
-    ->Args({5})
+    ->ArgNames({"inertial_K", "row_groups"})
+    ->Args({0, 1})
+    ->Args({0, 0})
+    ->Args({5, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime()

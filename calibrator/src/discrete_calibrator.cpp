@@ -687,7 +687,7 @@ class DiscreteProblem {
 
   double CornerTime(const PreparedCamera& cam, std::size_t i) const {
     const SensorState& s = *cam.state;
-    return 1e-9 * static_cast<double>(cam.stamps[i] - prep_.t0_ns) + s.time_offset +
+    return 1e-9 * static_cast<double>(cam.Stamp(i) - prep_.t0_ns) + s.time_offset +
            cam.corners[i].uv.y() * s.line_delay;
   }
 
@@ -724,12 +724,12 @@ class DiscreteProblem {
     c.time_offset = list->Add(&s.time_offset, 1);
     c.line_delay = list->Add(&s.line_delay, 1);
     c.params = list->Add(s.camera->mutable_params(), s.camera->NumParams());
-    return discrete::MakeDiscreteCorner(s.camera->type(), cam->corners[i], Stamp(*cam, i), src, c,
-                                        *list);
+    return discrete::MakeDiscreteCorner(s.camera->type(), cam->Measurement(i), Stamp(*cam, i), src,
+                                        c, *list);
   }
 
   double Stamp(const PreparedCamera& cam, std::size_t i) const {
-    return 1e-9 * static_cast<double>(cam.stamps[i] - prep_.t0_ns);
+    return 1e-9 * static_cast<double>(cam.Stamp(i) - prep_.t0_ns);
   }
 
   // The corner's whitened residual at the current values, evaluated on its own (the statistics
@@ -791,11 +791,12 @@ class DiscreteProblem {
       const std::size_t i0 = in_problem[first].first;
       const CornerSlot slot = in_problem[first].second;
       std::size_t last = first + 1;
-      while (last < in_problem.size() && cam->stamps[in_problem[last].first] == cam->stamps[i0])
+      while (last < in_problem.size() &&
+             cam->corners[in_problem[last].first].frame == cam->corners[i0].frame)
         ++last;
       std::vector<CornerMeasurement> corners;
       for (std::size_t j = first; j < last; ++j)
-        corners.push_back(cam->corners[in_problem[j].first]);
+        corners.push_back(cam->Measurement(in_problem[j].first));
       BlockList list;
       const std::size_t k = static_cast<std::size_t>(slot.k);
       const BaseSource src = BaseSource::Add(&list, &kf_[k], slot.kinematic ? nullptr : &kf_[k + 1],

@@ -1,6 +1,7 @@
 #include "ctcal/calibrator/lm_solver.h"
 
 #include <ceres/cost_function.h>
+#include <ceres/evaluation_callback.h>
 #include <ceres/loss_function.h>
 #include <ceres/manifold.h>
 
@@ -96,8 +97,8 @@ void ApplyLoss(const ceres::LossFunction& loss, int rows, double* r, RowMatrix* 
 class LevenbergMarquardt::Impl {
  public:
   Impl(const ceres::Solver::Options& options, const std::vector<double*>& border,
-       ceres::Problem* problem)
-      : o_(options), problem_(*problem) {
+       ceres::Problem* problem, ceres::EvaluationCallback* point_callback)
+      : o_(options), problem_(*problem), point_callback_(point_callback) {
     if (o_.minimizer_type != ceres::TRUST_REGION ||
         o_.trust_region_strategy_type != ceres::LEVENBERG_MARQUARDT)
       throw std::invalid_argument(
@@ -135,6 +136,7 @@ class LevenbergMarquardt::Impl {
 
   const ceres::Solver::Options o_;  // a copy: the solver outlives the caller's options
   ceres::Problem& problem_;
+  ceres::EvaluationCallback* const point_callback_;
   int threads_ = 1;
   std::vector<Column> columns_;
   std::vector<int> offset_;  // ambient offset of each column block in x
@@ -235,6 +237,8 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
     }
     if (cols.empty()) {
       double cost = 0.0;
+      if (point_callback_ != nullptr)
+        point_callback_->PrepareForEvaluation(false, true);
       if (!EvaluateBlock(b, false, &fixed, &cost))
         throw std::runtime_error(
             "SolveLevenbergMarquardt: a constant residual block cannot be "
@@ -311,6 +315,10 @@ bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   std::vector<double> costs(T, 0.0);
   std::vector<char> ok(T, 1);
   std::vector<Eigen::VectorXd> g(T);
+  // Every pass is announced as a new point: the solver moves x between passes without telling
+  // which point it returns to, and a callback's cache keyed by its calls stays correct that way.
+  if (point_callback_ != nullptr)
+    point_callback_->PrepareForEvaluation(jacobian, true);
   ParallelFor(threads_, T, [&](std::size_t t) {
     NormalEquations* H = t == 0 ? H_.get() : partial_H_[t - 1].get();
     Scratch& s = scratch_[t];
@@ -671,8 +679,9 @@ MarginalInformation LevenbergMarquardt::Impl::MarginalizeToBorder() {
 }
 
 LevenbergMarquardt::LevenbergMarquardt(const ceres::Solver::Options& options,
-                                       const std::vector<double*>& border, ceres::Problem* problem)
-    : impl_(std::make_unique<Impl>(options, border, problem)) {}
+                                       const std::vector<double*>& border, ceres::Problem* problem,
+                                       ceres::EvaluationCallback* point_callback)
+    : impl_(std::make_unique<Impl>(options, border, problem, point_callback)) {}
 LevenbergMarquardt::~LevenbergMarquardt() = default;
 void LevenbergMarquardt::Solve(ceres::Solver::Summary* summary) {
   impl_->Solve(summary);
@@ -692,8 +701,9 @@ MarginalInformation LevenbergMarquardt::MarginalizeToBorder() {
 
 void SolveLevenbergMarquardt(const ceres::Solver::Options& options,
                              const std::vector<double*>& border, ceres::Problem* problem,
-                             ceres::Solver::Summary* summary) {
-  LevenbergMarquardt(options, border, problem).Solve(summary);
+                             ceres::Solver::Summary* summary,
+                             ceres::EvaluationCallback* point_callback) {
+  LevenbergMarquardt(options, border, problem, point_callback).Solve(summary);
 }
 
 }  // namespace ctcal

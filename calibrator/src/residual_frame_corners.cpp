@@ -4,12 +4,12 @@
 
 namespace ctcal {
 
-#define CTCAL_FRAME_CORNERS_RESIDUAL_INSTANTIATE(N, REP)                                      \
-  template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(          \
-      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);          \
-  template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(          \
-      CameraModelType, const CornerMeasurement*, int, const SegmentClock&, double, FrameRows, \
-      const std::vector<double*>&);
+#define CTCAL_FRAME_CORNERS_RESIDUAL_INSTANTIATE(N, REP)                                    \
+  template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(        \
+      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);        \
+  template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(        \
+      CameraModelType, const HeldCorner*, int, const Eigen::Vector3d*, const SegmentClock&, \
+      double, FrameRows, const std::vector<double*>&);
 CTCAL_FRAME_CORNERS_RESIDUAL_INSTANTIATE(4, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_INSTANTIATE(5, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_INSTANTIATE(6, kSplit)

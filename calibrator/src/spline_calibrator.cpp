@@ -174,8 +174,8 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
     std::size_t v = 0, dropped = 0;
     // Nearly every corner is kept: reserve once instead of growing to up to twice the size.
     cam.corners.reserve(d.corners.size());
-    cam.stamps.reserve(d.corners.size());
-    cam.corner_ids.reserve(d.corners.size());
+    cam.frame_stamps.reserve(cam.views.size());
+    cam.board_W.assign(board.Corners().begin(), board.Corners().end());
     for (const CornerObservation& c : d.corners) {
       while (v < cam.views.size() && cam.views[v].t_ns < c.t_ns)
         ++v;
@@ -192,13 +192,14 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
         ++cam.invalid;
         continue;
       }
-      CornerMeasurement m;
-      m.p_W = board.Corner(c.corner_id);
+      if (cam.frame_stamps.empty() || cam.frame_stamps.back() != c.t_ns)
+        cam.frame_stamps.push_back(c.t_ns);
+      HeldCorner m;
       m.uv = Eigen::Vector2d(c.u, c.v);
       m.sigma_px = c.sigma.value_or(s.config.pixel_sigma);
+      m.corner_id = c.corner_id;
+      m.frame = static_cast<std::int32_t>(cam.frame_stamps.size() - 1);
       cam.corners.push_back(m);
-      cam.stamps.push_back(c.t_ns);
-      cam.corner_ids.push_back(c.corner_id);
     }
     log_dropped(s, dropped, d.corners.size(), margin);
     cam.removed.assign(cam.corners.size(), false);

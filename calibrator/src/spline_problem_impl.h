@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +34,7 @@ using residual_internal::Jacobian;
 
 #include "ctcal/calibrator/residuals/frame_corners_residual.h"
 #include "ctcal/calibrator/residuals/inertial_block_residual.h"
+#include "ctcal/calibrator/residuals/inertial_row_groups.h"
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
@@ -57,14 +59,24 @@ inline constexpr double kRobustPredictedDecrease = 1e-4;
 
 // Everything the templated problem needs that does not depend on the spline type: the selected
 // data, the board views, and the shared run settings (prepared in spline_calibrator.cpp).
+// The corners are held compactly (HeldCorner, corner_residual.h): the frame blocks read them
+// where they are, and a long recording holds millions.
 struct PreparedCamera {
   SensorState* state = nullptr;
-  std::vector<CornerMeasurement> corners;  // corners of frames with a board view
-  std::vector<std::int64_t> stamps;        // image stamp of each corner (camera clock)
-  std::vector<int> corner_ids;             // board corner id of each corner (the report)
+  std::vector<HeldCorner> corners;         // corners of frames with a board view, frame by frame
+  std::vector<std::int64_t> frame_stamps;  // image stamp of each frame (camera clock)
+  std::vector<Eigen::Vector3d> board_W;    // the board's corners by id (world frame)
   std::vector<bool> removed;               // outliers
   std::vector<BoardView> views;
   int invalid = 0;
+
+  // Image stamp of corner i (camera clock).
+  std::int64_t Stamp(std::size_t i) const {
+    return frame_stamps[static_cast<std::size_t>(corners[i].frame)];
+  }
+  CornerMeasurement Measurement(std::size_t i) const {
+    return MeasurementOf(corners[i], board_W.data());
+  }
 };
 
 // The whitened residual of every corner left in the problem (evaluated corner by corner, also
@@ -280,10 +292,12 @@ class SplineProblem {
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     // With an evaluation callback Ceres writes every evaluation point into the parameter blocks'
     // memory before evaluating, which the split frames' intrinsic rows read their pose from
-    // (frame_corners_residual.h); without split frames nothing reads it, so Ceres need not copy.
+    // (frame_corners_residual.h) and the inertial row groups their earlier knots, counting the
+    // points (inertial_row_groups.h); without either nothing reads it, so Ceres need not copy.
     const bool any_split = std::any_of(prep_.cameras.begin(), prep_.cameras.end(),
                                        [&](const PreparedCamera& c) { return SplitsFrameRows(c); });
-    po.evaluation_callback = any_split ? &point_in_memory_ : nullptr;
+    point_in_memory_used_ = any_split || options_.split_inertial_rows;
+    po.evaluation_callback = point_in_memory_used_ ? &point_in_memory_ : nullptr;
     solver_.reset();  // it reads the old problem
     problem_ = std::make_unique<ceres::Problem>(po);
     kept_corners_.clear();
@@ -364,7 +378,8 @@ class SplineProblem {
         if (b.estimated)
           border.push_back(b.values);
       }
-      solver_ = std::make_unique<LevenbergMarquardt>(so, border, problem_.get());
+      solver_ = std::make_unique<LevenbergMarquardt>(
+          so, border, problem_.get(), point_in_memory_used_ ? &point_in_memory_ : nullptr);
       // Long recordings' compressed inertial blocks span many knots: their band (on both threads)
       // would hold more than Ceres' Jacobian and J^T J together (10 min at 1 kHz: +76 MB, with
       // normal equations estimated larger than the Jacobian), so they stay with Ceres
@@ -605,10 +620,11 @@ class SplineProblem {
   // and the outlier gate need it per corner, also where the problem holds frame blocks).
   bool EvaluateCorner(const PreparedCamera& cam, std::size_t i, Eigen::Vector2d* e) {
     SensorState& s = *cam.state;
-    const int seg = SegmentOf(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay);
+    const std::int64_t stamp = cam.Stamp(i);
+    const int seg = SegmentOf(stamp, s.time_offset + cam.corners[i].uv.y() * s.line_delay);
     const std::unique_ptr<ceres::CostFunction> cost(
-        MakeCornerResidual<N, Rep>(true, s.camera->type(), cam.corners[i],
-                                   SegmentClock::At(cam.stamps[i], spline_.timing(), seg)));
+        MakeCornerResidual<N, Rep>(true, s.camera->type(), cam.Measurement(i),
+                                   SegmentClock::At(stamp, spline_.timing(), seg)));
     typename CornerResidual<N, Rep>::Parameters p;
     p.traj = TrajBlocks(seg);
     p.q_B_C = s.q_B_S.data();
@@ -626,7 +642,7 @@ class SplineProblem {
     std::size_t first = 0;
     while (first < cam.corners.size()) {
       std::size_t last = first + 1;
-      while (last < cam.corners.size() && cam.stamps[last] == cam.stamps[first])
+      while (last < cam.corners.size() && cam.corners[last].frame == cam.corners[first].frame)
         ++last;
       f(first, last);
       first = last;
@@ -651,14 +667,14 @@ class SplineProblem {
       if (Compressed(cam)) {
         ForEachFrame(cam, [&](std::size_t first, std::size_t last) {
           if (AnyLeft(cam, first, last))
-            f(SegmentCoordinate(cam.stamps[first], s.time_offset));
+            f(SegmentCoordinate(cam.Stamp(first), s.time_offset));
         });
         continue;
       }
       for (std::size_t i = 0; i < cam.corners.size(); ++i) {
         if (cam.removed[i])
           continue;
-        f(SegmentCoordinate(cam.stamps[i], s.time_offset + cam.corners[i].uv.y() * s.line_delay));
+        f(SegmentCoordinate(cam.Stamp(i), s.time_offset + cam.corners[i].uv.y() * s.line_delay));
       }
     }
     for (const PreparedInertial& in : prep_.inertial) {
@@ -687,7 +703,7 @@ class SplineProblem {
     ForEachFrame(*cam, [&](std::size_t first, std::size_t last) {
       if (!AnyLeft(*cam, first, last))
         return;
-      const std::int64_t stamp = cam->stamps[first];
+      const std::int64_t stamp = cam->Stamp(first);
       const int seg = SegmentOf(stamp, s.time_offset);
       segments_.push_back(seg);
       typename FrameCornersResidual<N, Rep>::Parameters p;
@@ -698,15 +714,16 @@ class SplineProblem {
       p.params = s.camera->mutable_params();
       const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
       const double huber = robust ? options_.huber_threshold : 0.0;
-      // The block reads the frame's corners where Prepare put them (prep_ outlives the problem):
-      // the corners are held once, not once more per block; a frame with outliers removed reads
-      // the rest from kept_corners_ (the problem's).
-      const CornerMeasurement* corners = &cam->corners[first];
+      // The block reads the frame's corners and board points where Prepare put them (prep_
+      // outlives the problem): the corners are held once, not once more per block; a frame with
+      // outliers removed reads the rest from kept_corners_ (the problem's).
+      const HeldCorner* corners = &cam->corners[first];
+      const Eigen::Vector3d* board_W = cam->board_W.data();
       int count = static_cast<int>(last - first);
       if (std::any_of(cam->removed.begin() + static_cast<std::ptrdiff_t>(first),
                       cam->removed.begin() + static_cast<std::ptrdiff_t>(last),
                       [](bool r) { return r; })) {
-        std::vector<CornerMeasurement> kept;
+        std::vector<HeldCorner> kept;
         for (std::size_t i = first; i < last; ++i) {
           if (!cam->removed[i])
             kept.push_back(cam->corners[i]);
@@ -717,16 +734,17 @@ class SplineProblem {
       }
       const std::vector<double*> blocks = FrameCornersResidual<N, Rep>::Blocks(p);
       if (!split) {
-        problem_->AddResidualBlock(
-            MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, clock, huber),
-            nullptr, blocks);
+        problem_->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners,
+                                                                    count, board_W, clock, huber),
+                                   nullptr, blocks);
         return;
       }
-      problem_->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count,
-                                                                  clock, huber, FrameRows::kPose),
-                                 nullptr, blocks);
       problem_->AddResidualBlock(
-          MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, clock, huber,
+          MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, board_W, clock, huber,
+                                           FrameRows::kPose),
+          nullptr, blocks);
+      problem_->AddResidualBlock(
+          MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, board_W, clock, huber,
                                            FrameRows::kIntrinsics, blocks),
           nullptr, p.params);
     });
@@ -742,10 +760,10 @@ class SplineProblem {
     for (std::size_t i = 0; i < cam->corners.size(); ++i) {
       if (cam->removed[i])
         continue;
-      const int seg =
-          SegmentOf(cam->stamps[i], s.time_offset + cam->corners[i].uv.y() * s.line_delay);
+      const std::int64_t stamp = cam->Stamp(i);
+      const int seg = SegmentOf(stamp, s.time_offset + cam->corners[i].uv.y() * s.line_delay);
       segments_.push_back(seg);
-      const SegmentClock clock = SegmentClock::At(cam->stamps[i], spline_.timing(), seg);
+      const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
       typename CornerResidual<N, Rep>::Parameters p;
       p.traj = TrajBlocks(seg);
       p.q_B_C = s.q_B_S.data();
@@ -753,8 +771,8 @@ class SplineProblem {
       p.time_offset = &s.time_offset;
       p.line_delay = &s.line_delay;
       p.params = s.camera->mutable_params();
-      ceres::CostFunction* cost =
-          MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(), cam->corners[i], clock);
+      ceres::CostFunction* cost = MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(),
+                                                             cam->Measurement(i), clock);
       if (robust)
         loss = new ceres::HuberLoss(options_.huber_threshold);
       problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p));
@@ -913,6 +931,8 @@ class SplineProblem {
         }
         return;
       }
+      // The row groups of the last runs, added interleaved (AddRowGroups).
+      std::vector<std::vector<std::pair<ceres::CostFunction*, std::vector<double*>>>> batch;
       // Runs of at most K segments whose samples share one bias segment.
       std::size_t begin = 0;
       while (begin < count) {
@@ -940,11 +960,28 @@ class SplineProblem {
           blocks.push_back(sample[b]);
           manifolds.push_back(LiftedManifold(sample[b]));
         }
-        ids.push_back(problem_->AddResidualBlock(
-            new InertialBlockResidual<R>(set.functors[begin], held, std::move(offsets),
-                                         num_segments, set.sizes, manifolds, 0.0, stacked),
-            nullptr, blocks));
+        auto whole = std::make_unique<InertialBlockResidual<R>>(set.functors[begin], held,
+                                                                std::move(offsets), num_segments,
+                                                                set.sizes, manifolds, 0.0, stacked);
         begin = end;
+        if (stacked || !options_.split_inertial_rows) {
+          ids.push_back(problem_->AddResidualBlock(whole.release(), nullptr, blocks));
+          continue;
+        }
+        // The factor's rows in groups over the blocks they touch (inertial_row_groups.h).
+        const int num_knot_blocks = static_cast<int>(blocks.size() - manifolds.size());
+        const std::vector<InertialRowGroupLayout> groups =
+            InertialRowGroups(whole->TangentColumns(), num_knot_blocks, whole->num_residuals());
+        const auto run = std::make_shared<SharedInertialRun>(std::move(whole), blocks,
+                                                             &point_in_memory_.generation);
+        auto& added = batch.emplace_back();
+        for (const InertialRowGroupLayout& g : groups) {
+          added.emplace_back(new InertialRowGroup(run, g.first_block, g.row0, g.rows,
+                                                  static_cast<int>(groups.size())),
+                             std::vector<double*>(blocks.begin() + g.first_block, blocks.end()));
+        }
+        if (static_cast<int>(batch.size()) >= std::max(1, options_.threads) || begin == count)
+          AddRowGroups(&batch, &ids);
       }
     });
     // Bias random walks between consecutive knots (these are part of the inertial model, kept
@@ -961,6 +998,26 @@ class SplineProblem {
           nullptr, s.bias_accel.Knot(k), s.bias_accel.Knot(k + 1));
     }
     inertial_ids_.emplace_back(s.name(), std::move(ids));
+  }
+
+  // Adds the row groups of up to `threads` runs (inertial_row_groups.h) interleaved, group k of
+  // every run before group k + 1: Ceres 2.1 hands residual block j to thread j mod threads, so
+  // every group of one run goes to one thread, which factors the run once and reads it in turn,
+  // instead of the run's groups meeting on two threads where one would wait for the other's
+  // factorisation.
+  void AddRowGroups(
+      std::vector<std::vector<std::pair<ceres::CostFunction*, std::vector<double*>>>>* batch,
+      std::vector<ceres::ResidualBlockId>* ids) {
+    std::size_t most = 0;
+    for (const auto& run : *batch)
+      most = std::max(most, run.size());
+    for (std::size_t k = 0; k < most; ++k) {
+      for (const auto& run : *batch) {
+        if (k < run.size())
+          ids->push_back(problem_->AddResidualBlock(run[k].first, nullptr, run[k].second));
+      }
+    }
+    batch->clear();
   }
 
   // Priors of `prior_sigma` on the estimated blocks, centred on the input's guesses.
@@ -988,14 +1045,19 @@ class SplineProblem {
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<int> segments_;
-  std::vector<std::vector<CornerMeasurement>> kept_corners_;  // frames with outliers removed
+  std::vector<std::vector<HeldCorner>> kept_corners_;  // frames with outliers removed
   bool robust_ = false;
   double last_cost_ = 0.0;  // of the last solve
 
-  // Nothing to prepare: its presence makes Ceres write each point into the blocks (Build).
+  // Its presence makes Ceres write each point into the blocks (Build); it counts the evaluation
+  // passes, which identify the point for the inertial row groups' shared factor.
   struct PointInMemory : ceres::EvaluationCallback {
-    void PrepareForEvaluation(bool, bool) override {}
+    void PrepareForEvaluation(bool, bool) override {
+      generation.fetch_add(1, std::memory_order_acq_rel);
+    }
+    std::atomic<std::uint64_t> generation{0};
   } point_in_memory_;
+  bool point_in_memory_used_ = false;  // the problem's evaluation callback (Build)
   So3RightManifold so3_right_;
   Se3RightManifold se3_right_;
   So3LeftManifold so3_left_;

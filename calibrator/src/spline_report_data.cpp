@@ -17,9 +17,9 @@ report::ReportData SplineReportData(const Prepared& prep, const TrajectoryEvalua
     rows.reserve(cam.corners.size());
     for (std::size_t i = 0; i < cam.corners.size(); ++i) {
       ReportCorner c;
-      c.t_ns = cam.stamps[i];
-      c.corner_id = i < cam.corner_ids.size() ? cam.corner_ids[i] : -1;
-      c.p_W = cam.corners[i].p_W;
+      c.t_ns = cam.Stamp(i);
+      c.corner_id = cam.corners[i].corner_id;
+      c.p_W = cam.board_W[static_cast<std::size_t>(c.corner_id)];
       c.uv = cam.corners[i].uv;
       c.sigma_px = cam.corners[i].sigma_px;
       c.outlier = cam.removed[i];

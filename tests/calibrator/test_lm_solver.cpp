@@ -4,9 +4,11 @@
 // the optimum, robust losses (one concave: Cauchy; one convex, whose Triggs correction has
 // rho'' > 0) and a start far enough for Levenberg-Marquardt to reject steps.
 #include <ceres/ceres.h>
+#include <ceres/evaluation_callback.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -249,6 +251,34 @@ TEST(LmSolver, CallbackEndsTheSolveAtTheCurrentPoint) {
   double cost = 0.0;
   ours.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
   EXPECT_NEAR(cost, summary.final_cost, 1e-12 * cost);
+}
+
+// The problem's evaluation callback (the spline problem's PointInMemory, which the inertial row
+// groups' shared factorisation keys on) is called before every evaluation pass, with the point
+// already in the parameter blocks' memory: at least once per trial step plus the start, and the
+// points it saw are the ones the solver moved through (the first the start, some later one not).
+TEST(LmSolver, EvaluationCallbackSeesEveryPointInMemory) {
+  struct Points : ceres::EvaluationCallback {
+    explicit Points(TestProblem* p) : problem(p) {}
+    void PrepareForEvaluation(bool, bool new_point) override {
+      EXPECT_TRUE(new_point);
+      seen.push_back(problem->Values());
+    }
+    TestProblem* problem;
+    std::vector<std::vector<double>> seen;
+  };
+  TestProblem t;
+  MakeProblem(&t, true);
+  const std::vector<double> start = t.Values();
+  Points points(&t);
+  ceres::Solver::Summary summary;
+  SolveLevenbergMarquardt(Options(2), t.Border(), t.problem.get(), &summary, &points);
+  const int steps = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  ASSERT_GT(steps, 2);
+  EXPECT_GE(static_cast<int>(points.seen.size()), steps + 1);
+  EXPECT_EQ(points.seen.front(), start);
+  EXPECT_TRUE(std::find(points.seen.begin(), points.seen.end(), t.Values()) != points.seen.end())
+      << "the final point was never announced";
 }
 
 // The border's information at the final point from the solver's last normal equations equals

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <deque>
 #include <memory>
 #include <random>
 
@@ -67,6 +68,24 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
     return out;
   }
 
+  // The corners as the calibrator holds them (HeldCorner, one frame): corner i is board point i.
+  struct HeldFrame {
+    std::vector<HeldCorner> corners;
+    std::vector<Eigen::Vector3d> board_W;
+  };
+  static HeldFrame Held(const std::vector<CornerMeasurement>& corners) {
+    HeldFrame f;
+    for (const CornerMeasurement& m : corners) {
+      HeldCorner c;
+      c.uv = m.uv;
+      c.sigma_px = m.sigma_px;
+      c.corner_id = static_cast<std::int32_t>(f.board_W.size());
+      f.board_W.push_back(m.p_W);
+      f.corners.push_back(c);
+    }
+    return f;
+  }
+
   std::vector<double*> FrameBlocks(int seg, double* params) {
     typename Frame::Parameters p;
     this->SetCameraBlocks(seg, params, &p);
@@ -118,7 +137,7 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
   }
 
   // The frame block (whole or split), or the per-corner blocks of the same corners, added to P;
-  // `corners` must outlive P (the split blocks read them).
+  // the split blocks read the corners held by the fixture (held_), which outlives P.
   void AddFrame(ceres::Problem* P, int mode, CameraModelType type,
                 const std::vector<CornerMeasurement>& corners, std::int64_t stamp, double huber,
                 double* params) {
@@ -131,13 +150,16 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
     }
     if (mode == kSplit) {
       const std::vector<double*> blocks = FrameBlocks(seg, params);
-      const int count = static_cast<int>(corners.size());
-      P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners.data(), count, clock,
-                                                           huber, FrameRows::kPose),
-                          nullptr, blocks);
-      P->AddResidualBlock(MakeFrameCornersResidual<N, Rep>(type, corners.data(), count, clock,
-                                                           huber, FrameRows::kIntrinsics, blocks),
-                          nullptr, params);
+      const HeldFrame& f = held_.emplace_back(Held(corners));
+      const int count = static_cast<int>(f.corners.size());
+      P->AddResidualBlock(
+          MakeFrameCornersResidual<N, Rep>(type, f.corners.data(), count, f.board_W.data(), clock,
+                                           huber, FrameRows::kPose),
+          nullptr, blocks);
+      P->AddResidualBlock(
+          MakeFrameCornersResidual<N, Rep>(type, f.corners.data(), count, f.board_W.data(), clock,
+                                           huber, FrameRows::kIntrinsics, blocks),
+          nullptr, params);
       return;
     }
     for (const CornerMeasurement& m : corners) {
@@ -150,6 +172,7 @@ class FrameCornersTest : public ::testing::Test, protected testing::CameraState<
   struct PointInMemory : ceres::EvaluationCallback {
     void PrepareForEvaluation(bool, bool) override {}
   } point_in_memory_;
+  std::deque<HeldFrame> held_;  // the split blocks' corners (a deque: stable addresses)
   So3RightManifold so3_;
   Se3RightManifold se3_;
   So3LeftManifold left_;
@@ -194,8 +217,9 @@ TYPED_TEST(FrameCornersTest, JacobiansMatchCentralDifferences) {
   }
 }
 
-// A block reading corners held by the caller (the calibrator's one copy) is the block that owns a
-// copy of them: the same residuals and Jacobians to the last bit, in L2 and with Huber.
+// A block reading corners held by the caller (the calibrator's one compact copy: pixels, board
+// ids into a table of board points) is the block that owns full copies of them: the same
+// residuals and Jacobians to the last bit, in L2 and with Huber.
 TYPED_TEST(FrameCornersTest, HeldCornersGiveTheSameBlockAsOwnedOnes) {
   for (const CameraModelType type : kModels) {
     Eigen::VectorXd params = testing::CameraParams(type);
@@ -207,9 +231,11 @@ TYPED_TEST(FrameCornersTest, HeldCornersGiveTheSameBlockAsOwnedOnes) {
     for (const double huber : {0.0, 3.0}) {
       const std::unique_ptr<ceres::CostFunction> owned(
           MakeFrameCornersResidual<TestFixture::N, TestFixture::Rep>(type, corners, clock, huber));
+      const auto f = TestFixture::Held(corners);
       const std::unique_ptr<ceres::CostFunction> held(
           MakeFrameCornersResidual<TestFixture::N, TestFixture::Rep>(
-              type, corners.data(), static_cast<int>(corners.size()), clock, huber));
+              type, f.corners.data(), static_cast<int>(f.corners.size()), f.board_W.data(), clock,
+              huber));
       const std::vector<double*> blocks = this->FrameBlocks(seg, params.data());
       const testing::Evaluation a = testing::EvaluateCost(*owned, blocks);
       const testing::Evaluation b = testing::EvaluateCost(*held, blocks);

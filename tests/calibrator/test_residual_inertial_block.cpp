@@ -9,12 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <cmath>
 #include <memory>
 #include <random>
 
 #include "ctcal/calibrator/residuals/aux_gyro_residual.h"
 #include "ctcal/calibrator/residuals/aux_imu_residual.h"
 #include "ctcal/calibrator/residuals/base_imu_residual.h"
+#include "ctcal/calibrator/residuals/inertial_row_groups.h"
 #include "residual_test_utils.h"
 
 namespace ctcal {
@@ -202,9 +205,11 @@ class InertialBlockTest : public ::testing::Test {
 
   // Per-sample blocks (K = 0) or compressed (stacked: uncompressed) blocks of K segments over the
   // same samples, owning their functors or (held) reading the raw samples.
+  // groups: each compressed block as its row groups (inertial_row_groups.h; the problem must
+  // have point_in_memory_ as its evaluation callback).
   template <class R>
   void AddSamples(ceres::Problem* P, const Samples<R>& s, int K, double huber, bool stacked = false,
-                  bool held = false) {
+                  bool held = false, bool groups = false) {
     const std::size_t n = s.functors.size();
     if (K == 0) {
       for (std::size_t i = 0; i < n; ++i) {
@@ -235,6 +240,7 @@ class InertialBlockTest : public ::testing::Test {
         const bool rotation = sample[b] == q_B_S_.coeffs().data() || sample[b] == imu_.q_rotation();
         manifolds.push_back(rotation ? &left_ : nullptr);
       }
+      std::unique_ptr<InertialBlockResidual<R>> block;
       if (held) {
         HeldInertialSamples<typename InertialBlockResidual<R>::Raw> h;
         h.samples = s.raw.data() + begin;
@@ -242,20 +248,34 @@ class InertialBlockTest : public ::testing::Test {
         h.first_segment = first;
         h.bias = bg_.timing();
         h.bias_segment = s.bseg[begin];
-        P->AddResidualBlock(
-            new InertialBlockResidual<R>(s.functors[begin], h, std::move(offsets), segments,
-                                         s.sizes, manifolds, huber, stacked),
-            nullptr, blocks);
+        block = std::make_unique<InertialBlockResidual<R>>(
+            s.functors[begin], h, std::move(offsets), segments, s.sizes, manifolds, huber, stacked);
       } else {
-        P->AddResidualBlock(new InertialBlockResidual<R>(std::move(f), std::move(offsets), segments,
-                                                         s.sizes, manifolds, huber, stacked),
-                            nullptr, blocks);
+        block = std::make_unique<InertialBlockResidual<R>>(
+            std::move(f), std::move(offsets), segments, s.sizes, manifolds, huber, stacked);
       }
       begin = end;
+      if (!groups) {
+        P->AddResidualBlock(block.release(), nullptr, blocks);
+        continue;
+      }
+      const auto layout = InertialRowGroups(block->TangentColumns(),
+                                            static_cast<int>(blocks.size() - manifolds.size()),
+                                            block->num_residuals());
+      EXPECT_GE(layout.size(), 2u);
+      const auto run = std::make_shared<SharedInertialRun>(std::move(block), blocks,
+                                                           &point_in_memory_.generation);
+      for (const InertialRowGroupLayout& g : layout) {
+        P->AddResidualBlock(new InertialRowGroup(run, g.first_block, g.row0, g.rows,
+                                                 static_cast<int>(layout.size())),
+                            nullptr,
+                            std::vector<double*>(blocks.begin() + g.first_block, blocks.end()));
+      }
     }
   }
 
   struct Eval {
+    double cost_only = 0.0;
     double cost = 0.0;
     Eigen::VectorXd gradient;
     Eigen::MatrixXd H;
@@ -265,12 +285,13 @@ class InertialBlockTest : public ::testing::Test {
 
   template <class R>
   Eval Evaluate(const Samples<R>& s, int K, double huber, bool intrinsics_constant,
-                bool stacked = false, bool held = false) {
+                bool stacked = false, bool held = false, bool groups = false) {
     ceres::Problem::Options po;
     po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.evaluation_callback = groups ? &point_in_memory_ : nullptr;
     ceres::Problem P(po);
     AddParameters(&P);
-    AddSamples<R>(&P, s, K, huber, stacked, held);
+    AddSamples<R>(&P, s, K, huber, stacked, held, groups);
     if (intrinsics_constant) {
       for (double* b : {imu_.Dw(), imu_.Da(), imu_.Tg(), imu_.q_rotation(), gyro_.Dw()}) {
         if (b != nullptr)
@@ -286,9 +307,12 @@ class InertialBlockTest : public ::testing::Test {
       if (!users.empty())
         eo.parameter_blocks.push_back(b);  // the same columns in both problems
     }
+    eo.num_threads = 2;  // the row groups of a run meet on both threads
     Eval e;
     std::vector<double> g, residuals;
     ceres::CRSMatrix crs;
+    // The cost alone first (the row groups' residual-only path), then everything.
+    EXPECT_TRUE(P.Evaluate(eo, &e.cost_only, nullptr, nullptr, nullptr));
     EXPECT_TRUE(P.Evaluate(eo, &e.cost, &residuals, &g, &crs));
     e.residuals = Eigen::Map<const Eigen::VectorXd>(residuals.data(),
                                                     static_cast<Eigen::Index>(residuals.size()));
@@ -364,6 +388,84 @@ class InertialBlockTest : public ::testing::Test {
       }
     }
   }
+
+  // Row groups (the rows of each compressed block cut at block boundaries, each group over the
+  // blocks from its first) against the whole blocks: residuals and Jacobian equal to the last
+  // bit, the cost with and without Jacobians to rounding; L2 and Huber, intrinsics free and
+  // constant, owned and held samples.
+  template <class R>
+  void ExpectRowGroupsSame(const Samples<R>& s, const char* what) {
+    for (const double huber : {0.0, 3.0}) {
+      for (const bool constant : {false, true}) {
+        for (const bool held : {false, true}) {
+          SCOPED_TRACE(std::string(what) + " huber " + std::to_string(huber) +
+                       (constant ? " intrinsics constant" : "") + (held ? " held" : ""));
+          const Eval a = Evaluate<R>(s, 4, huber, constant, false, held, false);
+          const Eval b = Evaluate<R>(s, 4, huber, constant, false, held, true);
+          ASSERT_EQ(a.residuals.size(), b.residuals.size());
+          ASSERT_EQ(a.J.rows(), b.J.rows());
+          ASSERT_EQ(a.J.cols(), b.J.cols());
+          EXPECT_GT(testing::MaxAbs(a.J), 0.0);
+          EXPECT_EQ(testing::MaxAbs(a.residuals - b.residuals), 0.0);
+          EXPECT_EQ(testing::MaxAbs(a.J - b.J), 0.0);
+          EXPECT_NEAR(b.cost, a.cost, 1e-13 * a.cost);
+          EXPECT_NEAR(b.cost_only, a.cost, 1e-13 * a.cost);
+          EXPECT_NEAR(a.cost_only, a.cost, 1e-13 * a.cost);
+        }
+      }
+    }
+  }
+
+  // Two Levenberg-Marquardt iterations from a perturbed point (every block free, two threads):
+  // the same steps with row groups as with whole blocks (the groups read the knots before their
+  // first block from the blocks' memory at each point Ceres evaluates). Returns the parameters.
+  template <class R>
+  Eigen::VectorXd SolveTwice(const Samples<R>& s, bool groups) {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.evaluation_callback = groups ? &point_in_memory_ : nullptr;
+    ceres::Problem P(po);
+    AddParameters(&P);
+    AddSamples<R>(&P, s, 4, 0.0, false, true, groups);
+    std::vector<double*> all;
+    P.GetParameterBlocks(&all);
+    std::vector<std::vector<double>> start;
+    for (double* b : all)
+      start.emplace_back(b, b + P.ParameterBlockSize(b));
+    for (double* b : all) {
+      std::vector<ceres::ResidualBlockId> users;
+      P.GetResidualBlocksForParameterBlock(b, &users);
+      if (users.empty())
+        P.SetParameterBlockConstant(b);
+    }
+    // Move the knots' positions off the data's point (the rotations stay unit quaternions).
+    for (int k = 0; k < spline_.NumKnots(); ++k)
+      spline_.KnotData(k)[4] += 1e-3 * std::sin(0.7 * k);
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = 2;
+    so.num_threads = 2;
+    so.function_tolerance = 0.0;
+    so.gradient_tolerance = 0.0;
+    so.parameter_tolerance = 0.0;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &P, &summary);
+    EXPECT_EQ(summary.iterations.size(), 3u) << summary.FullReport();
+    std::vector<double> values;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const int size = P.ParameterBlockSize(all[i]);
+      values.insert(values.end(), all[i], all[i] + size);
+      std::copy(start[i].begin(), start[i].end(), all[i]);  // back to the fixture's point
+    }
+    return Eigen::Map<const Eigen::VectorXd>(values.data(),
+                                             static_cast<Eigen::Index>(values.size()));
+  }
+
+  // Counts the evaluation passes: the row groups' evaluation point (inertial_row_groups.h).
+  struct PointInMemory : ceres::EvaluationCallback {
+    void PrepareForEvaluation(bool, bool) override { generation.fetch_add(1); }
+    std::atomic<std::uint64_t> generation{0};
+  } point_in_memory_;
 
   Samples<Base> BaseSamples() {
     return MakeSamples<Base>(0.0, Base::BlockSizes(imu_.layout()), [&] {
@@ -453,6 +555,49 @@ TYPED_TEST(InertialBlockTest, HeldSamplesGiveTheOwnedBlockExactly) {
   this->ExpectHeldSame(this->BaseSamples(), Name(Kind::kBaseImu));
   this->ExpectHeldSame(this->AuxImuSamples(), Name(Kind::kAuxImu));
   this->ExpectHeldSame(this->AuxGyroSamples(), Name(Kind::kAuxGyro));
+}
+
+// Row groups hold the whole block's rows: the same residuals and Jacobian to the bit, the same
+// cost; base IMU, auxiliary IMU, gyroscope.
+TYPED_TEST(InertialBlockTest, RowGroupsHoldTheWholeBlocksRowsExactly) {
+  this->ExpectRowGroupsSame(this->BaseSamples(), Name(Kind::kBaseImu));
+  this->ExpectRowGroupsSame(this->AuxImuSamples(), Name(Kind::kAuxImu));
+  this->ExpectRowGroupsSame(this->AuxGyroSamples(), Name(Kind::kAuxGyro));
+}
+
+// Two solver iterations (evaluations at new points, candidate steps residual-only): the row
+// groups take the whole blocks' steps, to rounding of the summation order.
+TYPED_TEST(InertialBlockTest, RowGroupsTakeTheWholeBlocksSteps) {
+  const auto base = this->BaseSamples();
+  const Eigen::VectorXd a = this->SolveTwice(base, false);
+  const Eigen::VectorXd b = this->SolveTwice(base, true);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-10);
+}
+
+// The groups of a 1 kHz run on a cubic split spline (K = 9: 12 rotation and 12 position knots,
+// then the common blocks): four trajectory parts and the common rows with the remainder row.
+TEST(InertialRowGroupsTest, CutsTheTrajectoryInFourAndKeepsTheCommonRows) {
+  std::vector<int> tan_col;
+  for (int b = 0; b < 24; ++b)
+    tan_col.push_back(3 * b);
+  // The common blocks' starts: 72, then after gravity (2), biases (4 x 3), Dw, Da, Tg, R_I_a.
+  int col = 72;
+  for (const int size : {2, 3, 3, 3, 3, 6, 6, 9, 3}) {
+    tan_col.push_back(col);
+    col += size;
+  }
+  const auto groups = InertialRowGroups(tan_col, 24, col + 1);
+  ASSERT_EQ(groups.size(), 5u);
+  const int first[] = {0, 6, 12, 18, 24};
+  int row = 0;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    EXPECT_EQ(groups[g].first_block, first[g]);
+    EXPECT_EQ(groups[g].row0, row);
+    row += groups[g].rows;
+  }
+  EXPECT_EQ(row, col + 1);  // every row once, the remainder row in the last group
+  EXPECT_EQ(groups.back().rows, col + 1 - 72);
 }
 
 TEST(InertialBlockStackedTest, RefusesARobustLoss) {

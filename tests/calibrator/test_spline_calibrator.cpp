@@ -177,6 +177,33 @@ TEST(SplineCalibrator, OwnSolverMatchesCeres) {
   std::printf("own solver: worst |own - ceres| %.2e sigma, sigma %.2e relative\n", a.worst, worst);
 }
 
+// The own Levenberg-Marquardt on the inertial row groups (compressed runs of 3 segments forced
+// here, so that the memory rule picks the own solver; inertial_row_groups.h): groups that read
+// the knots before their first block from the parameter memory and share one factorisation per
+// run and point. The same outliers, iterations and estimates (0.01 sigma) as Ceres' solve.
+TEST(SplineCalibrator, OwnSolverMatchesCeresOnInertialRowGroups) {
+  const test::Recording l = test::LoadRecording(SimulatedData(11, 12.0));
+  SplineCalibratorOptions options;
+  options.threads = 2;
+  options.report_data = false;
+  options.inertial_block_segments = 3;
+  int own_solves = 0;
+  const SplineCalibrationResult own =
+      CalibrateSpline(l.rig, l.data, options, [&](const std::string& line) {
+        own_solves += line.find("own Levenberg-Marquardt") != std::string::npos ? 1 : 0;
+      });
+  ASSERT_GT(own_solves, 0)
+      << "the memory rule chose Ceres: this test would not test the own solver";
+  options.lm_solver = false;
+  const SplineCalibrationResult ceres_run = CalibrateSpline(l.rig, l.data, options, Quiet());
+  ExpectSameOutliers(own, ceres_run);
+  EXPECT_EQ(own.iterations, ceres_run.iterations);
+  const Agreement a = ExpectAgreement(ceres_run.result, own.result, 0.01);
+  EXPECT_GE(a.compared, 95);
+  std::printf("own solver, inertial row groups: %d own solves, worst |own - ceres| %.2e sigma\n",
+              own_solves, a.worst);
+}
+
 // The frames split into pose and intrinsic rows (docs/performance.md step 7e; forced here, the
 // rule splits long recordings only) against whole frame blocks: the same corners gated out, the
 // same iterations and every estimate within 0.01 sigma (the split holds the same rows; only

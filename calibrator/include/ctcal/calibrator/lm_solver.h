@@ -39,8 +39,12 @@ namespace ctcal {
 class LevenbergMarquardt {
  public:
   // The problem's structure is read here: it must not change until the solver is destroyed.
+  // `point_callback`: the problem's ceres::EvaluationCallback, if it has one (a ceres::Problem
+  // does not expose it): called before every evaluation pass as Ceres would call it, with the
+  // point already in the parameter blocks' memory (residuals such as the inertial row groups
+  // identify the evaluation point by its calls).
   LevenbergMarquardt(const ceres::Solver::Options& options, const std::vector<double*>& border,
-                     ceres::Problem* problem);
+                     ceres::Problem* problem, ceres::EvaluationCallback* point_callback = nullptr);
   ~LevenbergMarquardt();
   LevenbergMarquardt(const LevenbergMarquardt&) = delete;
   LevenbergMarquardt& operator=(const LevenbergMarquardt&) = delete;
@@ -80,6 +84,7 @@ class LevenbergMarquardt {
 // std::invalid_argument for options it does not implement.
 void SolveLevenbergMarquardt(const ceres::Solver::Options& options,
                              const std::vector<double*>& border, ceres::Problem* problem,
-                             ceres::Solver::Summary* summary);
+                             ceres::Solver::Summary* summary,
+                             ceres::EvaluationCallback* point_callback = nullptr);
 
 }  // namespace ctcal

@@ -31,6 +31,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -44,6 +45,26 @@ struct CornerMeasurement {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();   // measured pixel
   double sigma_px = 1.0;                          // its standard deviation per axis
 };
+
+// A corner as a long recording holds it (32 bytes instead of a CornerMeasurement's 48 plus a
+// stamp and an id): the board point by its id in the board's corner table, the image stamp by
+// the frame's index in a table of frame stamps. 10 min of two cameras hold 2.9 M corners
+// (docs/performance.md, step 7g).
+struct HeldCorner {
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // measured pixel
+  double sigma_px = 1.0;                         // its standard deviation per axis
+  std::int32_t corner_id = 0;                    // index into the board's corner table
+  std::int32_t frame = 0;                        // index into the camera's frame stamps
+};
+
+// The measurement of a held corner, the board point read from `board_W` (indexed by corner id).
+inline CornerMeasurement MeasurementOf(const HeldCorner& c, const Eigen::Vector3d* board_W) {
+  CornerMeasurement m;
+  m.p_W = board_W[c.corner_id];
+  m.uv = c.uv;
+  m.sigma_px = c.sigma_px;
+  return m;
+}
 
 template <int N, Se3Representation Rep>
 class CornerResidual {

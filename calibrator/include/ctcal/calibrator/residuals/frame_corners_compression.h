@@ -20,12 +20,12 @@ namespace ctcal {
 // L2. Writes r = [z; last] (kNx + 1 values) and R (kNx x kNx, upper triangular, rows beyond 2M
 // zero), where x perturbs the pose on the left (p_C -> Exp(dtheta) p_C + dt) and the intrinsics.
 // Returns false when a corner does not project validly.
-// `corners` points to the frame's M corners.
-template <class Model>
-bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double* params,
-                          const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
-                          double huber_threshold, double* residuals,
-                          Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
+// `corner_at(i)` gives the frame's corner i < M as a CornerMeasurement (owned or held corners).
+template <class Model, class CornerAt>
+bool CompressFrameCornersOf(
+    int M, const CornerAt& corner_at, const double* params, const Eigen::Matrix3d& R_C_W,
+    const Eigen::Vector3d& t_C_W, double huber_threshold, double* residuals,
+    Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
   constexpr int kNx = 6 + Model::kNumParams;
   const double huber = huber_threshold;
   Eigen::Matrix<double, Eigen::Dynamic, kNx + 1> A(2 * M, kNx + 1);
@@ -33,7 +33,7 @@ bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double*
   Eigen::Matrix<double, 2, 3> J_uv_p;
   Eigen::Matrix<double, 2, Model::kNumParams> J_uv_params;
   for (int i = 0; i < M; ++i) {
-    const CornerMeasurement& m = corners[i];
+    const CornerMeasurement m = corner_at(i);
     const Eigen::Vector3d p_C = R_C_W * m.p_W + t_C_W;
     Eigen::Vector2d uv;
     if (!Model::template Project<double>(params, p_C, &uv, &J_uv_p, &J_uv_params))
@@ -70,6 +70,29 @@ bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double*
   const double rho = rows == kNx + 1 ? QR(kNx, kNx) : 0.0;
   r(kNx) = std::sqrt(rho * rho + std::max(remainder, 0.0));
   return true;
+}
+
+// The corner sources of CompressFrameCornersOf: corners owned as CornerMeasurements, or held
+// compactly with their board points in a table (HeldCorner). Named types, not lambdas, so that
+// the factorisation is compiled once per camera model and source, not once per residual class.
+struct OwnedCornerAt {
+  const CornerMeasurement* corners;
+  const CornerMeasurement& operator()(int i) const { return corners[i]; }
+};
+struct HeldCornerAt {
+  const HeldCorner* corners;
+  const Eigen::Vector3d* board_W;
+  CornerMeasurement operator()(int i) const { return MeasurementOf(corners[i], board_W); }
+};
+
+// The M corners at `corners` (owned by the caller).
+template <class Model>
+bool CompressFrameCorners(const CornerMeasurement* corners, int M, const double* params,
+                          const Eigen::Matrix3d& R_C_W, const Eigen::Vector3d& t_C_W,
+                          double huber_threshold, double* residuals,
+                          Eigen::Matrix<double, 6 + Model::kNumParams, 6 + Model::kNumParams>* R) {
+  return CompressFrameCornersOf<Model>(M, OwnedCornerAt{corners}, params, R_C_W, t_C_W,
+                                       huber_threshold, residuals, R);
 }
 
 template <class Model>

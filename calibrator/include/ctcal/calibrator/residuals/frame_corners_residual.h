@@ -132,21 +132,26 @@ class FrameCornersResidual {
     Analytic(std::vector<CornerMeasurement> corners, const SegmentClock& clock,
              double huber_threshold)
         : owned_(std::move(corners)),
-          corners_(owned_.data()),
           num_corners_(static_cast<int>(owned_.size())),
           clock_(clock),
           huber_(huber_threshold) {
       SetRows(FrameRows::kAll, {});
     }
-    // The same on `count` corners held by the caller, which must outlive the block: a long
-    // recording's millions of corners are then held once (docs/performance.md, step 7).
+    // The same on `count` corners held by the caller, which must outlive the block, with their
+    // board points in `board_W` (indexed by corner id, also held by the caller): a long
+    // recording's millions of corners are then held once and compactly (docs/performance.md,
+    // steps 7 and 7g).
     // rows: kAll, or one half of the split (file comment); kIntrinsics reads the pose from
     // `blocks` (Blocks(), the memory Ceres writes each evaluation point into) and has the
     // parameter block `params` only.
-    Analytic(const CornerMeasurement* corners, int count, const SegmentClock& clock,
-             double huber_threshold, FrameRows rows = FrameRows::kAll,
+    Analytic(const HeldCorner* corners, int count, const Eigen::Vector3d* board_W,
+             const SegmentClock& clock, double huber_threshold, FrameRows rows = FrameRows::kAll,
              const std::vector<double*>& blocks = {})
-        : corners_(corners), num_corners_(count), clock_(clock), huber_(huber_threshold) {
+        : held_(corners),
+          board_W_(board_W),
+          num_corners_(count),
+          clock_(clock),
+          huber_(huber_threshold) {
       SetRows(rows, blocks);
     }
     Analytic(const Analytic&) = delete;
@@ -214,8 +219,12 @@ class FrameCornersResidual {
       // remainder row (frame_corners_compression.h; this file's comment derives it).
       MatX R;
       double r[kNx + 1];
-      if (!CompressFrameCorners<Model>(corners_, num_corners_, p[kParams], R_C_W, t_C_W, huber_, r,
-                                       &R))
+      const bool projected =
+          held_ != nullptr
+              ? CompressFrameCornersOf<Model>(num_corners_, HeldCornerAt{held_, board_W_},
+                                              p[kParams], R_C_W, t_C_W, huber_, r, &R)
+              : CompressFrameCorners<Model>(owned_, p[kParams], R_C_W, t_C_W, huber_, r, &R);
+      if (!projected)
         return false;
       if (Rows != kNx + 1 && jacobians == nullptr) {
         // A half of the split, residual only: the whole cost in its first row (file comment).
@@ -271,7 +280,8 @@ class FrameCornersResidual {
     }
 
     std::vector<CornerMeasurement> owned_;  // empty when the caller holds the corners
-    const CornerMeasurement* corners_;
+    const HeldCorner* held_ = nullptr;      // the caller's corners, else nullptr
+    const Eigen::Vector3d* board_W_ = nullptr;
     int num_corners_;
     SegmentClock clock_;
     double huber_;
@@ -293,28 +303,29 @@ ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
   });
 }
 
-// The same on `count` corners held by the caller (not copied): they must outlive the block.
+// The same on `count` corners held by the caller (not copied) with their board points in
+// `board_W` (indexed by corner id): both must outlive the block.
 // rows: the whole factor, or one half of the split (file comment; kIntrinsics reads the pose from
 // `blocks`, FrameCornersResidual::Blocks(), and its only parameter block is `params`).
 template <int N, Se3Representation Rep>
-ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type,
-                                              const CornerMeasurement* corners, int count,
+ceres::CostFunction* MakeFrameCornersResidual(CameraModelType type, const HeldCorner* corners,
+                                              int count, const Eigen::Vector3d* board_W,
                                               const SegmentClock& clock, double huber_threshold,
                                               FrameRows rows = FrameRows::kAll,
                                               const std::vector<double*>& blocks = {}) {
   return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
     using Model = decltype(model);
     return new typename FrameCornersResidual<N, Rep>::template Analytic<Model>(
-        corners, count, clock, huber_threshold, rows, blocks);
+        corners, count, board_W, clock, huber_threshold, rows, blocks);
   });
 }
 
-#define CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(N, REP)                                           \
-  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(   \
-      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);          \
-  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>(   \
-      CameraModelType, const CornerMeasurement*, int, const SegmentClock&, double, FrameRows, \
-      const std::vector<double*>&);
+#define CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(N, REP)                                         \
+  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
+      CameraModelType, std::vector<CornerMeasurement>, const SegmentClock&, double);        \
+  extern template ceres::CostFunction* MakeFrameCornersResidual<N, Se3Representation::REP>( \
+      CameraModelType, const HeldCorner*, int, const Eigen::Vector3d*, const SegmentClock&, \
+      double, FrameRows, const std::vector<double*>&);
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(4, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(5, kSplit)
 CTCAL_FRAME_CORNERS_RESIDUAL_EXTERN(6, kSplit)

@@ -214,6 +214,8 @@ class InertialBlockResidual final : public ceres::CostFunction {
   }
 
   int NumSamples() const { return static_cast<int>(offsets_.size()); }
+  // The tangent column (= the factor's row) where each of the block's parameter blocks starts.
+  const std::vector<int>& TangentColumns() const { return tan_col_; }
 
   // The knot blocks' manifolds, as the residuals lift their Jacobians (residual_support.h).
   static const ceres::Manifold* TrajectoryManifold(int group) {
