@@ -38,6 +38,19 @@ class ReportTest : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = test::MakeTempDir("ctcal_report"); }
   void TearDown() override { fs::remove_all(dir_); }
+  // The synthetic output's report data as read, its cam0 errors unrounded again (the writers
+  // round them: a write must not see its own rounding already done).
+  ReportData UnroundedSyntheticData() const {
+    test::MakeSyntheticOut(dir_);
+    std::vector<std::string> ignored;
+    std::vector<std::string> names;
+    for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
+      names.push_back(s.name);
+    ReportData data = LoadReportData(dir_, names);
+    for (CornerResidual& c : data.corners.at("cam0"))
+      c.du += 1e-9;
+    return data;
+  }
   std::string dir_;
 };
 
@@ -529,14 +542,7 @@ TEST_F(ReportTest, CornerCoordinatesTooLongForFixedPointAreWrittenExactly) {
 // `ctcal calibrate` renders the report from the data it has just written, `ctcal report` from the
 // folder: the same HTML, byte for byte.
 TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
-  test::MakeSyntheticOut(dir_);
-  std::vector<std::string> ignored;
-  std::vector<std::string> names;
-  for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
-    names.push_back(s.name);
-  ReportData data = LoadReportData(dir_, names);
-  for (CornerResidual& c : data.corners.at("cam0"))  // unrounded again: WriteReportData rounds
-    c.du += 1e-9;
+  const ReportData data = UnroundedSyntheticData();
   const ReportData stored = WriteReportData(dir_, data, 2);
   ReportOptions opt;
   opt.ctcal_version = "test";
@@ -550,14 +556,7 @@ TEST_F(ReportTest, ReportFromMemoryEqualsReportFromTheFolder) {
 // `ctcal calibrate` writes the report data in two halves, the exact tables while it draws the
 // report: the same files as WriteReportData, byte for byte, and the same data drawn.
 TEST_F(ReportTest, WritingInTwoHalvesWritesTheSameFilesAndData) {
-  test::MakeSyntheticOut(dir_);
-  std::vector<std::string> ignored;
-  std::vector<std::string> names;
-  for (const auto& s : LoadRig(dir_ + "/result.yaml", &ignored).sensors)
-    names.push_back(s.name);
-  ReportData data = LoadReportData(dir_, names);
-  for (CornerResidual& c : data.corners.at("cam0"))  // unrounded again: the writers round
-    c.du += 1e-9;
+  const ReportData data = UnroundedSyntheticData();
   const std::string whole = dir_ + "/whole", halves = dir_ + "/halves";
   const ReportData a = WriteReportData(whole, data, 2);
   const ReportData b = WriteRoundedReportData(halves, data, 2);
