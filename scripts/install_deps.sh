@@ -19,7 +19,7 @@ PACKAGES=(
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
 # libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt);
-# fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot.cpp);
+# fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot_draw.h);
 # poppler-utils (pdftoppm, pdftotext), chromium and python3 (scripts/spec_sim.py, standard
 # library only) are called by tests; python3-numpy and python3-opencv are what the independent
 # image renderer (scripts/spec_render.py, run by /usr/bin/python3) needs; opencv-doc and visp-images-data hold real board photos the
