@@ -1,0 +1,77 @@
+// The detector's passes shared across its files (detector*.cpp, apriltag_tags.cpp,
+// tag_edges.cpp, corner_refinement.cpp): libapriltag runs, tag checks, grid completion, the final
+// refinement. Each is documented where it is defined. Private to targets/.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <set>
+#include <vector>
+
+#include "ctcal/targets/board.h"
+#include "ctcal/targets/detector.h"
+#include "tag_family.h"
+
+namespace ctcal::internal {
+
+// The window of the tag corners' refinement during detection, in black borders: its capture range
+// brings a start a pixel or two off (libapriltag's straight-edge quads, the grid completion's
+// extrapolations on blurred fisheye rims) onto the junction. The final estimate comes from
+// DetectorOptions::tag_window_borders (Detector::RefineTagCorners).
+constexpr double kCaptureWindowBorders = 0.8;
+
+// Smaller images are no views (libapriltag and the refinement need some room).
+constexpr int kMinImageSide = 16;
+
+// Tag id -> its four corners (tag order, px).
+using TagCorners = std::map<int, std::array<Eigen::Vector2d, 4>>;
+
+// apriltag_tags.cpp: libapriltag and the checks of single tags.
+apriltag_detector_t* NewApriltagDetector(apriltag_family_t* family, float quad_decimate);
+std::vector<TagDetection> RunApriltag(apriltag_detector_t* detector, const cv::Mat& gray);
+bool InnerBorderIsBlack(const cv::Mat& gray, const TagDetection& tag, int black_border);
+bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size& image_size,
+                      double margin_px);
+double SampleBilinear(const cv::Mat& gray, double x, double y);
+int TagCodeDistance(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                    const Board& board, int id);
+std::vector<TagDetection> RunCheckingBorder(apriltag_detector_t* detector, const cv::Mat& image,
+                                            const cv::Mat& gray, const Board& board,
+                                            std::set<int>* bad_border);
+std::vector<TagDetection> DetectGridTags(apriltag_detector_t* detector, const cv::Mat& gray,
+                                         const Board& board, std::set<int>* bad_border,
+                                         const std::vector<TagDetection>* first_pass);
+
+// tag_edges.cpp: where tags' corners lie against their edges.
+int TagCornerHalfWindow(int black_border, double bit_px, double borders);
+TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& corners);
+void DropTagsOffTheirEdges(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
+                           DetectionResult* result);
+
+// detector_aprilgrid.cpp: tags libapriltag missed, found from the board.
+void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
+                  const DetectorOptions& options, const std::set<int>& excluded,
+                  DetectionResult* result);
+
+// detector.cpp: a corner's final estimate after its capture window.
+void RefineFinal(const cv::Mat& gray, double noise_sigma, int half_window, DetectedCorner* corner);
+
+}  // namespace ctcal::internal
+
+namespace ctcal {
+
+// A libapriltag detector and its family, held by Detector's pool (libapriltag is not
+// thread-safe, so each concurrent call gets its own).
+struct Detector::TagContext {
+  internal::TagFamilyPtr family;
+  apriltag_detector_t* detector = nullptr;
+  ~TagContext() {
+    if (detector != nullptr)
+      apriltag_detector_destroy(detector);  // before the family: it frees the decode table
+  }
+};
+
+}  // namespace ctcal
