@@ -1,5 +1,6 @@
 // The rig's rules (rig_yaml_rules.h) and its validation (ValidateRig): what a rig must satisfy
 // before it is calibrated or written, whoever built it.
+#include <Eigen/Dense>
 #include <cctype>
 #include <cmath>
 #include <set>
