@@ -22,6 +22,7 @@
 #include "ctcal/report/distortion_field.h"
 #include "ctcal/report/plot.h"
 #include "ctcal/report/stage_time.h"
+#include "ctcal/report/verdict.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -1162,6 +1163,9 @@ std::vector<Check> EvaluateChecks(const RigConfig& result, const ReportData& dat
   for (const SensorConfig& s : result.sensors) {
     if (s.IsInertial())
       continue;
+    const auto res = result.residuals.find(s.name);
+    out.push_back(
+        PixelRmsCheck(s, res == result.residuals.end() ? std::nullopt : res->second.rms_px));
     const auto it = data.corners.find(s.name);
     Check o;
     o.name = "outlier fraction";
