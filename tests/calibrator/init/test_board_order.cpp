@@ -11,11 +11,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "../simulated_recording.h"
+#include "../symmetric_stereo.h"
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/targets/detector.h"
-#include "simulated_recording.h"
-#include "symmetric_stereo.h"
 
 namespace ctcal {
 namespace {
