@@ -4,10 +4,14 @@
 #include <cstdio>
 #include <ctime>
 #include <future>
+#include <iostream>
 
+#include "cli_common.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/report/report.h"
 #include "ctcal/report/stage_time.h"
+#include "ctcal/report/verdict.h"
+#include "ctcal/sensors/rig_yaml.h"
 #include "ctcal_git_describe.h"  // generated at build time (cmake/GitDescribe.cmake)
 
 namespace ctcal::app {
@@ -28,9 +32,11 @@ report::RunInfo CalibrateRunInfo(int argc, char** argv) {
   return info;
 }
 
-bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
-                            const report::RunInfo& run_info, const CalibrationLog& log,
-                            int threads) {
+CalibrationVerdict WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
+                                          const report::RunInfo& run_info,
+                                          const CalibrationLog& log, int threads) {
+  CalibrationVerdict verdict;
+  verdict.out_dir = out_dir;
   report::StageClock clock;
   log("report: writing " + out_dir + "/report_data/ and rendering report.html, report.pdf");
   try {
@@ -46,6 +52,15 @@ bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
       report::WriteExactReportData(out_dir, stored, 1);
     });
     const report::StageTime written = clock.Lap("report data");
+    // The checks first, from what the report reads (result.yaml as written, the stored data):
+    // the exit code stands even when the rendering below fails.
+    try {
+      std::vector<std::string> warnings;
+      verdict.checks = report::EvaluateChecks(LoadRig(out_dir + "/result.yaml", &warnings), stored);
+      verdict.evaluated = true;
+    } catch (const std::exception& e) {
+      verdict.error = e.what();
+    }
     report::ReportOptions options;
     options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
     options.threads = threads;
@@ -68,11 +83,33 @@ bool WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
                   out.pdf_pages, out.figure_ids.size(), fails, warns, wall);
     log(line);
     log("  " + report::FormatStageTimes(out.stages));
-    return true;
+    verdict.report_written = true;
   } catch (const std::exception& e) {
+    if (!verdict.evaluated && verdict.error.empty())
+      verdict.error = e.what();
     log(std::string("warning: the report was not written: ") + e.what());
-    return false;
   }
+  return verdict;
+}
+
+int ExitCodeOfChecks(const std::vector<CalibrationVerdict>& verdicts, const CalibrationLog& log) {
+  bool failed = false;
+  for (const CalibrationVerdict& v : verdicts) {
+    if (!v.evaluated) {
+      const std::string line =
+          "error: " + v.out_dir + ": the checks could not be evaluated: " + v.error;
+      log(line);
+      std::cerr << "ctcal calibrate: " << line << std::endl;
+      return kExitFailed;
+    }
+    const std::string where = verdicts.size() > 1 ? " [" + v.out_dir + "]" : "";
+    for (const std::string& line : report::FailedCheckLines(v.checks)) {
+      log(line + where);
+      std::cerr << line << where << std::endl;
+      failed = true;
+    }
+  }
+  return failed ? kExitChecksFailed : kExitOk;
 }
 
 }  // namespace ctcal::app

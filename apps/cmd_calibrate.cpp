@@ -3,13 +3,16 @@
 // calibrator (calibrator/spline_calibrator.h), the discrete one (discrete_calibrator.h) or both
 // with a cross-check, and writes OUT/result.yaml, the Kalibr files, OUT/log.txt and the report
 // (OUT/report_data/, OUT/report.html, OUT/report.pdf; calibrate_report.h; every method).
-// `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml.
+// `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml. The exit code is the
+// report's verdict (SPEC section 8): 3 when one of its checks failed (calibrate_report.h).
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "calibrate_report.h"
@@ -18,6 +21,7 @@
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
 #include "ctcal/calibrator/discrete/crosscheck.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
+#include "ctcal/calibrator/init/board_order.h"
 #include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/report/stage_time.h"
@@ -61,8 +65,9 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
   log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
       ", " + report::FormatStageTime(clock->Lap("results")));
-  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, threads);
-  return kExitOk;
+  return ExitCodeOfChecks(
+      {WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, threads)},
+      log);
 }
 
 // Writes one full result (result.yaml, Kalibr files) into `dir` and prints its table.
@@ -124,9 +129,9 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
   try {
     if (method == "discrete") {
       WriteResult(discrete, out_dir, log);
-      WriteCalibrationReport(out_dir, std::move(discrete.report_data), run_info, log,
-                             spline_options.threads);
-      return kExitOk;
+      return ExitCodeOfChecks({WriteCalibrationReport(out_dir, std::move(discrete.report_data),
+                                                      run_info, log, spline_options.threads)},
+                              log);
     }
     WriteResult(spline, out_dir + "/spline", log);
     WriteResult(discrete, out_dir + "/discrete", log);
@@ -139,14 +144,15 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
     for (const char* sub : {"/spline", "/discrete"})
       std::filesystem::copy_file(out_dir + "/crosscheck.yaml", out_dir + sub + "/crosscheck.yaml",
                                  std::filesystem::copy_options::overwrite_existing);
-    WriteCalibrationReport(out_dir + "/spline", std::move(spline.report_data), run_info, log,
-                           spline_options.threads);
-    WriteCalibrationReport(out_dir + "/discrete", std::move(discrete.report_data), run_info, log,
-                           spline_options.threads);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
-  return kExitOk;
+  std::vector<CalibrationVerdict> verdicts;
+  verdicts.push_back(WriteCalibrationReport(out_dir + "/spline", std::move(spline.report_data),
+                                            run_info, log, spline_options.threads));
+  verdicts.push_back(WriteCalibrationReport(out_dir + "/discrete", std::move(discrete.report_data),
+                                            run_info, log, spline_options.threads));
+  return ExitCodeOfChecks(verdicts, log);
 }
 
 }  // namespace
@@ -157,7 +163,9 @@ int RunCalibrate(int argc, char** argv) {
                   "--rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both] "
                   "[--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
-                  "estimated intrinsic, extrinsic and time offset with its sigma.");
+                  "estimated intrinsic, extrinsic and time offset with its sigma. Exit code 0: "
+                  "every check of the report passed; 3: the result and report are written but a "
+                  "check failed (each named on stderr); 1: the run failed; 2: bad input.");
   std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity,
       split_frame_rows;
   SplineCalibratorOptions options;
@@ -283,6 +291,21 @@ int RunCalibrate(int argc, char** argv) {
         DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log);
       }))
     return *failed;
+  // A board that looks the same turned (a checkerboard with rows + cols even): each view's corner
+  // order is settled by consistency across cameras and along time before any calibrator reads
+  // the corners (calibrator/init/board_order.h); views it cannot settle are dropped with a
+  // warning.
+  if (const auto failed = Guarded(cli, log_file, [&] {
+        BoardOrderOptions order;
+        order.threads = options.threads > 0
+                            ? options.threads
+                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        const BoardOrderResult resolved = ResolveBoardOrder(
+            rig, &data, order, [&](const std::string& line) { log("[init] " + line); });
+        for (const std::string& w : resolved.warnings)
+          log("warning: " + w);
+      }))
+    return *failed;
   const report::StageTime detection = clock.Lap("detection");
 
   // The configuration of the run, for the report.
@@ -332,8 +355,9 @@ int RunCalibrate(int argc, char** argv) {
       ", " + report::FormatStageTime(clock.Lap("results")));
   run_info.emplace_back("result.knot_spacing_s", std::to_string(result.knot_spacing_s));
   run_info.emplace_back("result.num_knots", std::to_string(result.num_knots));
-  WriteCalibrationReport(out_dir, std::move(result.report_data), run_info, log, options.threads);
-  return kExitOk;
+  return ExitCodeOfChecks({WriteCalibrationReport(out_dir, std::move(result.report_data), run_info,
+                                                  log, options.threads)},
+                          log);
 }
 
 }  // namespace ctcal::app

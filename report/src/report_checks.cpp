@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ctcal/report/report.h"
+#include "ctcal/report/verdict.h"
 #include "report_format.h"
 
 namespace ctcal::report {
@@ -68,6 +69,9 @@ std::vector<Check> EvaluateChecks(const RigConfig& result, const ReportData& dat
   for (const SensorConfig& s : result.sensors) {
     if (s.IsInertial())
       continue;
+    const auto res = result.residuals.find(s.name);
+    out.push_back(
+        PixelRmsCheck(s, res == result.residuals.end() ? std::nullopt : res->second.rms_px));
     const auto it = data.corners.find(s.name);
     Check o;
     o.name = "outlier fraction";

@@ -4,6 +4,7 @@
 // statistics (they are evaluated independently, from the final values), and `ctcal report`
 // re-renders the same document from the folder alone.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
@@ -348,7 +349,18 @@ TEST(CalibrateReportCameraOnly, EurocStereo) {
   const std::string cmd = std::string(CTCAL_BINARY) + " calibrate --rig " +
                           (data / "reference.yaml").string() + " --data " + data.string() +
                           " --out " + out + " > " + root + "/log.txt 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << Slurp(root + "/log.txt");
+  // EuRoC's published rig states 1 px for corners that fit to ~0.2 px (issue 19): the report's
+  // whitened RMS checks fail, so `calibrate` exits 3 (SPEC section 8) until the noise is estimated
+  // from the data; no other check may fail.
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_TRUE(WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 3) << Slurp(root + "/log.txt");
+  {
+    std::istringstream lines(Slurp(root + "/log.txt"));
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind("check failed:", 0) == 0)
+        EXPECT_NE(line.find("whitened RMS"), std::string::npos) << line;
+  }
   const RigConfig result = LoadRig(out + "/result.yaml");
   const std::string html = Slurp(out + "/report.html");
   for (const std::string cam : {"cam0", "cam1"}) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "checkerboard_config.h"
 #include "ctcal/targets/board.h"
 
 namespace ctcal {
@@ -21,15 +22,7 @@ TargetConfig AprilGrid(int rows, int cols, double size, double spacing, int bord
   return t;
 }
 
-TargetConfig Checkerboard(int rows, int cols, double row_spacing, double col_spacing) {
-  TargetConfig t;
-  t.type = TargetType::kCheckerboard;
-  t.target_rows = rows;
-  t.target_cols = cols;
-  t.row_spacing_m = row_spacing;
-  t.col_spacing_m = col_spacing;
-  return t;
-}
+using test::Checkerboard;
 
 TEST(Board, AprilGridIdsAndPositionsFollowSpec) {
   for (const auto& [rows, cols] : std::vector<std::pair<int, int>>{{6, 6}, {3, 5}, {7, 2}}) {
