@@ -73,6 +73,40 @@ RigConfig RenamedTruth(const fs::path& truth_yaml, const std::string& camera,
   return truth;
 }
 
+TEST(KalibrPath, BadInputIsOneLineNamingTheFile) {
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("ctcal_kalibr_bad_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "target.yaml")
+      << "target_type: aprilgrid\ntagCols: 6\ntagRows: 6\ntagSize: 0.088\ntagSpacing: 0.3\n";
+  const std::string target = " --target " + (dir / "target.yaml").string();
+  const test::CliRun missing =
+      test::RunCtcal("import-kalibr" + target + " --camchain " + (dir / "nope.yaml").string() +
+                         " --out " + (dir / "rig.yaml").string(),
+                     (dir / "missing").string());
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_EQ(test::Lines(missing.err), 1) << missing.err;
+  EXPECT_NE(missing.err.find("nope.yaml"), std::string::npos) << missing.err;
+  const test::CliRun nothing = test::RunCtcal(
+      "import-kalibr" + target + " --out " + (dir / "rig.yaml").string(), (dir / "none").string());
+  EXPECT_EQ(nothing.code, 2);
+  EXPECT_NE(nothing.err.find("give --camchain, --imu or both"), std::string::npos) << nothing.err;
+  EXPECT_FALSE(fs::exists(dir / "rig.yaml"));
+  // calibrate without a rig needs sensor.yaml files and a target.
+  const test::CliRun no_rig =
+      test::RunCtcal("calibrate --data " + dir.string() + " --out " + (dir / "out").string(),
+                     (dir / "no_rig").string());
+  EXPECT_EQ(no_rig.code, 2);
+  EXPECT_EQ(test::Lines(no_rig.err), 1) << no_rig.err;
+  EXPECT_NE(no_rig.err.find("give --rig RIG.yaml, or --target"), std::string::npos) << no_rig.err;
+  const test::CliRun no_yamls = test::RunCtcal(
+      "calibrate" + target + " --data " + dir.string() + " --out " + (dir / "out").string(),
+      (dir / "no_yamls").string());
+  EXPECT_EQ(no_yamls.code, 2);
+  EXPECT_NE(no_yamls.err.find("no --rig and no <sensor>/sensor.yaml"), std::string::npos)
+      << no_yamls.err;
+}
+
 // The recording and the Kalibr user's files, rendered once per test process (55 s of rendering):
 // ROOT/data (the ASL folder, its folders renamed to Kalibr's cam0 / imu0), ROOT/imu.yaml,
 // ROOT/target.yaml, ROOT/camchain.yaml. Empty when it could not be made (the reason in *why).
