@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <sstream>
 
 #include "ctcal/sensors/ecosystem_exports.h"
@@ -168,10 +169,12 @@ std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::stri
   Vector3Json(out, noise.gyroscope_random_walk);
   const double offset = rig.IsCameraOnly() || cams.empty() ? 0.0 : cams[0]->time_offset;
   for (const SensorConfig* c : cams) {
-    if (notes && !rig.IsCameraOnly() && std::abs(c->time_offset - offset) > 1e-6)
+    if (notes && !rig.IsCameraOnly() && std::abs(c->time_offset - offset) > 1e-6) {
+      char ms[32];
+      std::snprintf(ms, sizeof ms, "%+.3f ms", (c->time_offset - offset) * 1e3);
       notes->push_back("calibration.json: basalt has one camera time offset: " + cams[0]->name +
-                       "'s is written, " + c->name + "'s differs by " +
-                       FormatDouble((c->time_offset - offset) * 1e3) + " ms");
+                       "'s is written, " + c->name + "'s differs by " + ms);
+    }
   }
   out << ",\n    \"cam_time_offset_ns\": " << static_cast<std::int64_t>(std::llround(offset * 1e9))
       << ",\n    \"vignette\": []\n  }\n}\n";

@@ -104,8 +104,13 @@ SensorConfig ReadKalibrImuBlock(const YamlIn& in, const YAML::Node& node, const 
     // identity and is estimated (the IMU's own frame is then the model's, SPEC section 3).
     s.imu_model = options.calibrated_imu_model;
     s.g_sensitivity = s.imu_model == ImuModel::kNone ? GSensitivity::kNone : options.g_sensitivity;
-    if (s.imu_model != ImuModel::kNone)
+    if (s.imu_model != ImuModel::kNone) {
+      const StoredImuIntrinsics identity = ImuIntrinsics(s.imu_model, s.g_sensitivity).ToStored();
+      s.D_w = identity.Dw;
+      s.D_a = identity.Da;
+      s.T_g = identity.Tg;
       s.estimate.insert(EstimateItem::kIntrinsics);
+    }
   } else if (model == "scale-misalignment") {
     R_I_i = ReadScaleMisalignment(in, node, where, options, s);
   } else {

@@ -272,7 +272,7 @@ TEST(EcosystemExports, BasaltNotesWhatItCannotHold) {
   ASSERT_TRUE(EmitBasaltCalibration(rig, &why, &notes));
   ASSERT_EQ(notes.size(), 2u);
   EXPECT_NE(notes[0].find("T_g is left out"), std::string::npos) << notes[0];
-  EXPECT_NE(notes[1].find("cam1's differs by -3.2"), std::string::npos) << notes[1];
+  EXPECT_NE(notes[1].find("cam1's differs by -3.200 ms"), std::string::npos) << notes[1];
   rig.sensors[5].distortion_model = "radtan";  // omni-radtan: basalt has none
   rig.sensors[5].distortion_coeffs = {0.01, 0.0, 0.0, 0.0};
   EXPECT_FALSE(EmitBasaltCalibration(rig, &why));
