@@ -27,12 +27,54 @@
 #include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/dataset.h"
+#include "ctcal/sensors/ecosystem_exports.h"
+#include "ctcal/sensors/euroc_folder.h"
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "ctcal/targets/target_config.h"
 
 namespace ctcal::app {
 
 namespace {
+
+// Kalibr's files and the exports for basalt and OpenVINS beside result.yaml (docs/files.md); what
+// a format cannot hold is logged, one line each.
+void SaveFilesForOtherPrograms(const RigConfig& rig, const std::string& dir,
+                               const CalibrationLog& log) {
+  SaveKalibrFiles(rig, dir);
+  std::vector<std::string> notes;
+  SaveEcosystemExports(rig, dir, &notes);
+  for (const std::string& note : notes)
+    log("exports: " + note);
+}
+
+// The rig: the rig file; or, without one, the guesses of DATA's sensor.yaml files (EuRoC /
+// TUM-VI), with the target of --target. A rig file beside sensor.yaml files is cross-checked
+// against them (warnings; the rig file wins).
+RigConfig LoadRigOrEurocGuess(const std::string& rig_path, const std::string& target_path,
+                              const std::string& data_dir, std::vector<std::string>* warnings) {
+  if (!rig_path.empty()) {
+    if (!target_path.empty())
+      throw std::runtime_error(
+          "--target is for a DATA folder without --rig (the rig file has "
+          "its target)");
+    RigConfig rig = LoadRig(rig_path, warnings);
+    if (HasEurocSensorYamls(data_dir)) {
+      for (const std::string& w : CrossCheckEurocFolder(data_dir, rig))
+        warnings->push_back(w);
+    }
+    return rig;
+  }
+  if (target_path.empty())
+    throw std::runtime_error(
+        "give --rig RIG.yaml, or --target TARGET.yaml for a DATA folder "
+        "with sensor.yaml files (EuRoC / TUM-VI)");
+  if (!HasEurocSensorYamls(data_dir))
+    throw std::runtime_error(data_dir +
+                             ": no --rig and no <sensor>/sensor.yaml files to take "
+                             "the initial guesses from");
+  return RigFromEurocFolder(data_dir, LoadTargetConfig(target_path), warnings);
+}
 
 // A rig without IMUs is a camera calibration (SPEC section 7): per-frame board poses instead of a
 // trajectory spline, and Kalibr's camchain.yaml beside the result.
@@ -57,12 +99,12 @@ int RunCameraOnly(CommandLine& cli, const RigConfig& rig,
   const report::StageTime calibration = clock->Lap("calibration");
   try {
     SaveRig(result.rig, out_dir + "/result.yaml");
-    SaveKalibrFiles(result.rig, out_dir);
+    SaveFilesForOtherPrograms(result.rig, out_dir, log);
   } catch (const std::exception& e) {
     return cli.RunFailed(e.what());
   }
   log(FormatParameterTable(result.rig));
-  log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt");
+  log("wrote " + out_dir + "/result.yaml, camchain.yaml, log.txt and the exports");
   log("time: " + report::FormatStageTime(detection) + ", " + report::FormatStageTime(calibration) +
       ", " + report::FormatStageTime(clock->Lap("results")));
   return ExitCodeOfChecks(
@@ -76,7 +118,7 @@ void WriteResult(const SplineCalibrationResult& result, const std::string& dir,
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   SaveRig(result.result, dir + "/result.yaml");
-  SaveKalibrFiles(result.result, dir);
+  SaveFilesForOtherPrograms(result.result, dir, log);
   log("");
   log(FormatParameterTable(result.result));
   char line[200];
@@ -86,7 +128,7 @@ void WriteResult(const SplineCalibrationResult& result, const std::string& dir,
                 result.iterations, result.solve_seconds, result.seconds_per_iteration,
                 result.covariance_seconds, result.total_seconds);
   log(line);
-  log("wrote " + dir + "/result.yaml, camchain-imucam.yaml, imu.yaml");
+  log("wrote " + dir + "/result.yaml, camchain-imucam.yaml, imu.yaml and the exports");
 }
 
 // Runs a calibration; bad input exits with the input-error code, any other failure with the
@@ -160,18 +202,22 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
 int RunCalibrate(int argc, char** argv) {
   namespace po = boost::program_options;
   CommandLine cli("calibrate",
-                  "--rig RIG.yaml --data DATA --out OUT [--method spline|discrete|both] "
-                  "[--threads N] [--autodiff]",
+                  "--rig RIG.yaml | --target TARGET.yaml --data DATA --out OUT "
+                  "[--method spline|discrete|both] [--threads N] [--autodiff]",
                   "Calibrate a visual-inertial rig from a recording of a target board: every "
                   "estimated intrinsic, extrinsic and time offset with its sigma. Exit code 0: "
                   "every check of the report passed; 3: the result and report are written but a "
                   "check failed (each named on stderr); 1: the run failed; 2: bad input.");
-  std::string rig_path, data_dir, out_dir, method, representation, init_policy, aux_velocity,
-      split_frame_rows;
+  std::string rig_path, target_path, data_dir, out_dir, method, representation, init_policy,
+      aux_velocity, split_frame_rows;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
-  cli.options().add_options()("rig", po::value(&rig_path)->required(),
-                              "rig file with initial guesses (SPEC section 7)")(
+  cli.options().add_options()(
+      "rig", po::value(&rig_path),
+      "rig file with initial guesses (SPEC section 7); without it, DATA's sensor.yaml files "
+      "(EuRoC / TUM-VI mav0/) give them, with --target")(
+      "target", po::value(&target_path),
+      "Kalibr target yaml, for a DATA folder with sensor.yaml files and no --rig")(
       "data", po::value(&data_dir)->required(),
       "dataset folder (SPEC section 6); a camera with images but no corners.csv is detected "
       "first, its corners written to OUT/<camera>/corners.csv")(
@@ -262,7 +308,7 @@ int RunCalibrate(int argc, char** argv) {
   std::map<std::string, SensorData> data;
   try {
     std::vector<std::string> warnings;
-    rig = LoadRig(rig_path, &warnings);
+    rig = LoadRigOrEurocGuess(rig_path, target_path, data_dir, &warnings);
     for (const std::string& w : warnings)
       log("warning: " + w);
     // The camera models' own domain (a positive focal length, omni's xi, ...), which the rig

@@ -12,5 +12,6 @@ int RunCompare(int argc, char** argv);
 int RunReport(int argc, char** argv);
 int RunMonteCarlo(int argc, char** argv);
 int RunTarget(int argc, char** argv);
+int RunImportKalibr(int argc, char** argv);
 
 }  // namespace ctcal::app

@@ -22,12 +22,14 @@ constexpr Command kCommands[] = {
     {"report", ctcal::app::RunReport, "re-render the report of a finished calibration"},
     {"montecarlo", ctcal::app::RunMonteCarlo, "simulate and calibrate many seeds, test NEES"},
     {"target", ctcal::app::RunTarget, "write a printable board PDF"},
+    {"import-kalibr", ctcal::app::RunImportKalibr,
+     "turn Kalibr's camchain, imu and target yamls into a rig file"},
 };
 
 void PrintUsage(std::FILE* out) {
   std::fprintf(out, "usage: ctcal <command> [options]   (ctcal <command> --help)\n\ncommands:\n");
   for (const Command& c : kCommands)
-    std::fprintf(out, "  %-11s %s\n", c.name, c.summary);
+    std::fprintf(out, "  %-13s %s\n", c.name, c.summary);
   std::fprintf(out, "\n  --version   print the version\n");
 }
 

@@ -11,25 +11,15 @@
 #include "ctcal/sensors/kalibr_imu_model.h"
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig_yaml.h"
-#include "yaml_in.h"
+#include "export_helpers.h"
+#include "rigid_inverse.h"
 
 namespace ctcal {
 namespace {
 
-using internal::YamlIn;
-
-Eigen::Matrix4d Inverse(const Eigen::Matrix4d& T) {
-  Eigen::Matrix4d inv = Eigen::Matrix4d::Identity();
-  inv.topLeftCorner<3, 3>() = T.topLeftCorner<3, 3>().transpose();
-  inv.topRightCorner<3, 1>() = -T.topLeftCorner<3, 3>().transpose() * T.topRightCorner<3, 1>();
-  return inv;
-}
-
-Eigen::Matrix4d RotationOnly(const Eigen::Matrix3d& R) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = R;
-  return T;
-}
+using internal::ImuIntrinsicsOf;
+using internal::Inverse;
+using internal::KalibrCameras;
 
 template <typename Derived>
 void EmitMatrix(YAML::Emitter& out, const Eigen::MatrixBase<Derived>& m) {
@@ -50,19 +40,6 @@ void EmitNumbers(YAML::Emitter& out, const std::vector<double>& v) {
   out << YAML::EndSeq;
 }
 
-ImuIntrinsics IntrinsicsOf(const SensorConfig& s) {
-  StoredImuIntrinsics stored;
-  stored.Dw = s.D_w;
-  stored.Da = s.D_a;
-  stored.Tg = s.T_g;
-  const std::string rot = RotationKey(s.imu_model);
-  if (rot == "R_I_a")
-    stored.rotation = s.R_I_a;
-  else if (rot == "R_I_w")
-    stored.rotation = s.R_I_w;
-  return ImuIntrinsics::FromStored(s.imu_model, s.g_sensitivity, stored);
-}
-
 // Kalibr's model of an IMU, written in our frame I. SPEC fixes the files' IMU frame to ours
 // (`T_cam_imu = inverse(T_B_C)`), while Kalibr's canonical form (lower-triangular M's) lives in
 // its frame i = R_i_I I. Kalibr's equations hold in any frame: with a_i = R_i_I a_I,
@@ -72,22 +49,10 @@ KalibrScaleMisalignment KalibrModelOf(const SensorConfig& s) {
   if (s.imu_model == ImuModel::kNone)
     return {};
   Eigen::Matrix3d R_i_I;
-  KalibrScaleMisalignment k = ToKalibrScaleMisalignment(IntrinsicsOf(s), &R_i_I);
+  KalibrScaleMisalignment k = ToKalibrScaleMisalignment(ImuIntrinsicsOf(s), &R_i_I);
   k.M_accel = k.M_accel * R_i_I;
   k.C_gyro_i = k.C_gyro_i * R_i_I;
   return k;
-}
-
-// The cameras in Kalibr's order: rig order, the base camera first in a camera-only rig.
-std::vector<const SensorConfig*> KalibrCameras(const RigConfig& rig) {
-  std::vector<const SensorConfig*> cams;
-  if (rig.IsCameraOnly())
-    cams.push_back(&rig.Base());
-  for (const SensorConfig& s : rig.sensors) {
-    if (s.type == SensorType::kCamera && !(rig.IsCameraOnly() && s.name == rig.base_imu))
-      cams.push_back(&s);
-  }
-  return cams;
 }
 
 std::vector<const SensorConfig*> KalibrImus(const RigConfig& rig) {
@@ -222,206 +187,6 @@ std::vector<std::string> SaveKalibrFiles(const RigConfig& rig, const std::string
     written.push_back(imu);
   }
   return written;
-}
-
-namespace {
-
-// One IMU block of Kalibr's imu.yaml, into our frames. *T_b_S receives the pose of our frame I
-// of this IMU in Kalibr's frame b; *R_i_I Kalibr's i relative to our I.
-SensorConfig ReadKalibrImuBlock(const YamlIn& in, const YAML::Node& node, const std::string& name,
-                                const KalibrImportOptions& options, Eigen::Matrix4d* T_b_S) {
-  const std::string where = name;
-  in.CheckKeys(node, where,
-               {"T_i_b", "accelerometer_noise_density", "accelerometer_random_walk",
-                "gyroscope_noise_density", "gyroscope_random_walk", "model", "gyroscopes",
-                "accelerometers", "rostopic", "time_offset", "update_rate"},
-               "a Kalibr IMU");
-  SensorConfig s;
-  s.name = name;
-  s.type = SensorType::kImu;
-  auto req = [&](const char* key) {
-    if (!node[key])
-      in.Fail(node, where, std::string("missing required key '") + key + "'");
-    return in.FiniteDouble(node[key], where + "." + key);
-  };
-  s.noise.accelerometer_noise_density = req("accelerometer_noise_density");
-  s.noise.accelerometer_random_walk = req("accelerometer_random_walk");
-  s.noise.gyroscope_noise_density = req("gyroscope_noise_density");
-  s.noise.gyroscope_random_walk = req("gyroscope_random_walk");
-  s.noise.update_rate = req("update_rate");
-  if (node["rostopic"])
-    s.rostopic = in.String(node["rostopic"], where + ".rostopic");
-  if (node["time_offset"])
-    s.time_offset = in.FiniteDouble(node["time_offset"], where + ".time_offset");
-  const Eigen::Matrix4d T_i_b = node["T_i_b"]
-                                    ? Eigen::Matrix4d(in.Rigid(node["T_i_b"], where + ".T_i_b"))
-                                    : Eigen::Matrix4d::Identity();
-  const std::string model =
-      node["model"] ? in.String(node["model"], where + ".model") : std::string("calibrated");
-  Eigen::Matrix3d R_I_i = Eigen::Matrix3d::Identity();
-  if (model == "calibrated") {
-    s.imu_model = ImuModel::kNone;
-    s.g_sensitivity = GSensitivity::kNone;
-  } else if (model == "scale-misalignment") {
-    KalibrScaleMisalignment k;
-    if (node["gyroscopes"]) {
-      const YAML::Node g = node["gyroscopes"];
-      in.CheckKeys(g, where + ".gyroscopes", {"M", "A", "C_gyro_i"}, "Kalibr gyroscopes");
-      if (g["M"])
-        k.M_gyro = in.Matrix(g["M"], where + ".gyroscopes.M", 3, 3);
-      if (g["A"])
-        k.A_gyro = in.Matrix(g["A"], where + ".gyroscopes.A", 3, 3);
-      if (g["C_gyro_i"])
-        k.C_gyro_i = in.Rotation(g["C_gyro_i"], where + ".gyroscopes.C_gyro_i");
-    }
-    if (node["accelerometers"]) {
-      const YAML::Node a = node["accelerometers"];
-      in.CheckKeys(a, where + ".accelerometers", {"M"}, "Kalibr accelerometers");
-      if (a["M"])
-        k.M_accel = in.Matrix(a["M"], where + ".accelerometers.M", 3, 3);
-    }
-    KalibrImuImport imported;
-    try {
-      imported = FromKalibrScaleMisalignment(k, options.imu_model, options.g_sensitivity);
-    } catch (const std::invalid_argument& e) {
-      in.Fail(node, where, std::string("scale-misalignment model: ") + e.what());
-    }
-    const StoredImuIntrinsics stored = imported.intrinsics.ToStored();
-    s.imu_model = options.imu_model;
-    s.g_sensitivity = options.g_sensitivity;
-    s.D_w = stored.Dw;
-    s.D_a = stored.Da;
-    s.T_g = stored.Tg;
-    if (stored.rotation) {
-      if (RotationKey(s.imu_model) == "R_I_a")
-        s.R_I_a = *stored.rotation;
-      else
-        s.R_I_w = *stored.rotation;
-    }
-    R_I_i = imported.R_I_i;
-  } else {
-    in.Fail(node["model"], where,
-            "Kalibr IMU model '" + model +
-                "' is not supported (calibrated or scale-misalignment; "
-                "scale-misalignment-size-effect has lever arms ctcal does not model)");
-  }
-  // T_b_I = T_b_i * T_i_I = inverse(T_i_b) * R_i_I.
-  *T_b_S = Inverse(T_i_b) * RotationOnly(R_I_i.transpose());
-  return s;
-}
-
-}  // namespace
-
-RigConfig RigFromKalibr(const std::string& camchain_yaml, const std::string& imu_yaml,
-                        const TargetConfig& target, const KalibrImportOptions& options) {
-  RigConfig rig;
-  rig.target = target;
-  const bool camera_only = imu_yaml.empty();
-  // Our base frame B in Kalibr's b: T_b_B (identity for a camera-only rig: b is cam0).
-  Eigen::Matrix4d T_b_B = Eigen::Matrix4d::Identity();
-  if (!camera_only) {
-    const YamlIn in(imu_yaml);
-    const YAML::Node root = YamlIn::LoadFile(imu_yaml);
-    in.RequireMap(root, "");
-    std::vector<std::pair<std::string, YAML::Node>> blocks;
-    if (root["imu0"]) {
-      for (int k = 0; root["imu" + std::to_string(k)]; ++k)
-        blocks.emplace_back("imu" + std::to_string(k), root["imu" + std::to_string(k)]);
-      for (const auto& kv : root) {
-        const std::string key = in.String(kv.first, "");
-        bool listed = false;
-        for (const auto& block : blocks)
-          listed = listed || block.first == key;
-        if (!listed)
-          in.Fail(kv.first, "", "unexpected key '" + key + "' (expected imu0, imu1, ...)");
-      }
-    } else {
-      blocks.emplace_back("imu0", root);  // Kalibr's single-IMU input file
-    }
-    std::vector<Eigen::Matrix4d> T_b_S(blocks.size());
-    for (std::size_t k = 0; k < blocks.size(); ++k) {
-      rig.sensors.push_back(
-          ReadKalibrImuBlock(in, blocks[k].second, blocks[k].first, options, &T_b_S[k]));
-    }
-    T_b_B = T_b_S[0];
-    rig.base_imu = rig.sensors[0].name;
-    rig.sensors[0].time_offset = 0.0;
-    for (std::size_t k = 1; k < blocks.size(); ++k) {
-      rig.sensors[k].T_B_S = Inverse(T_b_B) * T_b_S[k];
-      rig.sensors[k].estimate = {EstimateItem::kExtrinsics, EstimateItem::kTimeOffset};
-    }
-  }
-
-  const YamlIn in(camchain_yaml);
-  const YAML::Node root = YamlIn::LoadFile(camchain_yaml);
-  in.RequireMap(root, "");
-  int n = 0;
-  for (; root["cam" + std::to_string(n)]; ++n) {
-  }
-  if (n == 0)
-    in.Fail(root, "", "no cam0 block: not a Kalibr camchain file");
-  if (static_cast<int>(root.size()) != n)
-    in.Fail(root, "", "keys other than cam0..cam" + std::to_string(n - 1));
-  Eigen::Matrix4d T_B_prev = Eigen::Matrix4d::Identity();
-  for (int k = 0; k < n; ++k) {
-    const std::string name = "cam" + std::to_string(k);
-    const YAML::Node c = root[name];
-    in.CheckKeys(c, name,
-                 {"T_cam_imu", "T_cn_cnm1", "cam_overlaps", "camera_model", "distortion_coeffs",
-                  "distortion_model", "intrinsics", "resolution", "rostopic", "timeshift_cam_imu",
-                  "line_delay"},
-                 "a Kalibr camera");
-    SensorConfig s;
-    s.name = name;
-    s.type = SensorType::kCamera;
-    for (const char* key : {"camera_model", "intrinsics", "distortion_model", "resolution"}) {
-      if (!c[key])
-        in.Fail(c, name, std::string("missing required key '") + key + "'");
-    }
-    s.camera_model = in.String(c["camera_model"], name + ".camera_model");
-    s.intrinsics = in.Vector(c["intrinsics"], name + ".intrinsics", -1);
-    s.distortion_model = in.String(c["distortion_model"], name + ".distortion_model");
-    if (c["distortion_coeffs"])
-      s.distortion_coeffs = in.Vector(c["distortion_coeffs"], name + ".distortion_coeffs", -1);
-    if (!c["resolution"].IsSequence() || c["resolution"].size() != 2)
-      in.Fail(c["resolution"], name, "resolution: expected [width, height]");
-    s.width = in.Int(c["resolution"][0], name + ".resolution");
-    s.height = in.Int(c["resolution"][1], name + ".resolution");
-    if (c["rostopic"])
-      s.rostopic = in.String(c["rostopic"], name + ".rostopic");
-    if (c["line_delay"])
-      s.line_delay = in.FiniteDouble(c["line_delay"], name + ".line_delay");
-    if (camera_only) {
-      if (k == 0) {
-        rig.base_imu = name;
-      } else {
-        if (!c["T_cn_cnm1"])
-          in.Fail(c, name, "missing required key 'T_cn_cnm1' (camera-only camchain)");
-        // T_B_Cn = T_B_Cn-1 * inverse(T_cn_cnm1).
-        s.T_B_S = T_B_prev * Inverse(in.Rigid(c["T_cn_cnm1"], name + ".T_cn_cnm1"));
-        s.estimate = {EstimateItem::kExtrinsics};
-      }
-    } else {
-      if (!c["T_cam_imu"])
-        in.Fail(c, name, "missing required key 'T_cam_imu'");
-      // T_B_C = T_B_b * T_b_C = inverse(T_b_B) * inverse(T_cam_imu).
-      s.T_B_S = Inverse(T_b_B) * Inverse(in.Rigid(c["T_cam_imu"], name + ".T_cam_imu"));
-      if (c["timeshift_cam_imu"])
-        s.time_offset = in.FiniteDouble(c["timeshift_cam_imu"], name + ".timeshift_cam_imu");
-      s.estimate = {EstimateItem::kExtrinsics, EstimateItem::kTimeOffset};
-    }
-    T_B_prev = s.T_B_S;
-    rig.sensors.push_back(s);
-  }
-  // Kalibr writes the rotation blocks with ~8 digits; re-orthonormalise so that our stricter
-  // consumers get exact rotations.
-  for (SensorConfig& s : rig.sensors) {
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(s.T_B_S.topLeftCorner<3, 3>(),
-                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
-    s.T_B_S.topLeftCorner<3, 3>() = svd.matrixU() * svd.matrixV().transpose();
-  }
-  ValidateRig(rig, camchain_yaml);
-  return rig;
 }
 
 }  // namespace ctcal

@@ -27,6 +27,10 @@ const std::set<std::string> kImuNoiseKeys = {"gyroscope_noise_density", "gyrosco
                                              "accelerometer_random_walk", "update_rate"};
 const std::set<std::string> kGyroNoiseKeys = {"gyroscope_noise_density", "gyroscope_random_walk",
                                               "update_rate"};
+// What a gyro's noise block may hold: its keys, or a whole Kalibr imu.yaml block.
+const std::set<std::string> kGyroKalibrNoiseKeys = {
+    "gyroscope_noise_density",     "gyroscope_random_walk",     "update_rate",
+    "accelerometer_noise_density", "accelerometer_random_walk", "rostopic"};
 
 class RigReader {
  public:
@@ -255,7 +259,20 @@ class RigReader {
       in_.Fail(sensor_node, Where(s.name), "missing required key 'noise' (Kalibr's noise keys)");
     const bool gyro = s.type == SensorType::kGyro;
     const std::set<std::string>& keys = gyro ? kGyroNoiseKeys : kImuNoiseKeys;
-    in_.CheckKeys(node, where, keys, gyro ? "the noise of a gyro" : "the noise of an imu");
+    // A gyro's block may be a whole Kalibr imu.yaml block (SPEC section 3): the accelerometer's
+    // keys (and its rostopic) are accepted and ignored, with one warning.
+    in_.CheckKeys(node, where, gyro ? kGyroKalibrNoiseKeys : kImuNoiseKeys,
+                  gyro ? "the noise of a gyro" : "the noise of an imu");
+    if (gyro) {
+      std::string ignored;
+      for (const auto& kv : node) {
+        const std::string key = kv.first.Scalar();
+        if (!keys.count(key))
+          ignored += (ignored.empty() ? "" : ", ") + key;
+      }
+      if (!ignored.empty())
+        Warn(where + ": " + ignored + " ignored (a gyroscope has no accelerometer)");
+    }
     std::map<std::string, double> v;
     for (const std::string& key : keys) {
       if (!node[key])

@@ -32,7 +32,7 @@ Result RunCtcal(const std::string& args) {
 }
 
 const char* const kCommands[] = {"simulate", "detect",     "calibrate", "compare",
-                                 "report",   "montecarlo", "target"};
+                                 "report",   "montecarlo", "target",    "import-kalibr"};
 
 class Cli : public ::testing::Test {
  protected:

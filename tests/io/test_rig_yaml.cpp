@@ -394,6 +394,41 @@ TEST(RigYaml, GyroSigmaAndPriorMayCarryATranslation) {
   EXPECT_NE(error.find("sensors.gyro0.prior_sigma.t_B_S"), std::string::npos) << error;
 }
 
+// SPEC section 3: a gyro's noise block may be a whole Kalibr imu.yaml block; its accelerometer
+// keys (and rostopic) are ignored with one warning, the gyroscope's are read. Another key is
+// still an error.
+TEST(RigYaml, GyroNoiseMayBeAWholeKalibrImuBlock) {
+  std::string text = kMinimal;
+  text += R"(    T_B_S: [[1,0,0,0.1],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+  gyro0:
+    type: gyro
+    noise:
+      accelerometer_noise_density: 1.86e-03
+      accelerometer_random_walk: 4.33e-04
+      gyroscope_noise_density: 1.87e-04
+      gyroscope_random_walk: 2.66e-05
+      rostopic: /imu0
+      update_rate: 200.0
+    T_B_S: [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]
+)";
+  std::vector<std::string> warnings;
+  const RigConfig rig = ParseRigString(text, "gyro.yaml", &warnings);
+  const SensorConfig& gyro = *rig.Find("gyro0");
+  EXPECT_EQ(gyro.noise.gyroscope_noise_density, 1.87e-04);
+  EXPECT_EQ(gyro.noise.gyroscope_random_walk, 2.66e-05);
+  EXPECT_EQ(gyro.noise.update_rate, 200.0);
+  EXPECT_EQ(gyro.noise.accelerometer_noise_density, 0.0);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("sensors.gyro0.noise: accelerometer_noise_density, "
+                             "accelerometer_random_walk, rostopic ignored"),
+            std::string::npos)
+      << warnings[0];
+  std::string bad = text;
+  bad.replace(bad.find("rostopic: /imu0"), 15, "magnetometer: 1");
+  const std::string error = ParseError(bad, "gyro.yaml");
+  EXPECT_NE(error.find("unknown key 'magnetometer'"), std::string::npos) << error;
+}
+
 // SPEC section 7: T_B_S and time_offset are for "all but the base". A file that spells out the
 // base's definition (identity, 0) reads as the file without them; another value is an error.
 TEST(RigYaml, BaseMayStateItsIdentityExtrinsicAndZeroOffset) {

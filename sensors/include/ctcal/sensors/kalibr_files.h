@@ -45,11 +45,28 @@ struct KalibrImportOptions {
   // The model a `scale-misalignment` IMU is imported into (every Kalibr result fits imu2/full).
   ImuModel imu_model = ImuModel::kImu2;
   GSensitivity g_sensitivity = GSensitivity::kFull;
+  // The model a `calibrated` IMU (Kalibr's default: an ideal IMU) is given: none keeps Kalibr's
+  // assumption; another model starts at the identity with `g_sensitivity` and is estimated.
+  ImuModel calibrated_imu_model = ImuModel::kNone;
+  // Cameras estimate their projection and distortion too (a camchain is a guess to refine;
+  // Kalibr's camera-IMU step keeps them fixed instead).
+  bool estimate_camera_intrinsics = true;
 };
 
-// A rig from Kalibr files: `imu_yaml` empty for a camera-only camchain.yaml (then cam0 is the
-// base and T_B_S chains T_cn_cnm1). Transforms are converted into our frames (the inverse of the
-// writer's). Estimate sets take the SPEC defaults.
+// `ctcal import-kalibr` (SPEC section 8): a rig from Kalibr's camchain (empty: none) and one or
+// more imu.yaml files (empty: a camera-only camchain.yaml, cam0 the base, T_B_S chaining
+// T_cn_cnm1). The IMUs of all files are imu0, imu1, ... in order, the first the base; each
+// block's T_i_b and time_offset (Kalibr's IMU-IMU results) are its guesses (identity and 0 when
+// absent). A camera's T_B_S is inverse(T_b_B) * inverse(T_cam_imu), its time_offset
+// timeshift_cam_imu; without T_cam_imu cam0 starts at the identity (a note in `warnings`), the
+// others chained by T_cn_cnm1, and ctcal calibrate's coarse initialisation finds them. Every
+// non-base sensor estimates its extrinsics and time offset. `rostopic` keys are kept.
+RigConfig RigFromKalibr(const std::string& camchain_yaml, const std::vector<std::string>& imu_yamls,
+                        const TargetConfig& target, const KalibrImportOptions& options,
+                        std::vector<std::string>* warnings);
+
+// The writer's inverse for one imu.yaml (empty: camera-only): Kalibr's own estimate sets
+// (cameras keep their intrinsics; a calibrated IMU stays model none).
 RigConfig RigFromKalibr(const std::string& camchain_yaml, const std::string& imu_yaml,
                         const TargetConfig& target, const KalibrImportOptions& options = {});
 

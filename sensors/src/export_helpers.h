@@ -1,0 +1,39 @@
+// Private to sensors/: what the writers of other programs' files (Kalibr, basalt, OpenVINS) take
+// from a rig: an IMU's full intrinsic matrices and the cameras in the files' order.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ctcal/sensors/imu_intrinsics.h"
+#include "ctcal/sensors/rig.h"
+
+namespace ctcal::internal {
+
+inline ImuIntrinsics ImuIntrinsicsOf(const SensorConfig& s) {
+  StoredImuIntrinsics stored;
+  stored.Dw = s.D_w;
+  stored.Da = s.D_a;
+  stored.Tg = s.T_g;
+  const std::string rot = RotationKey(s.imu_model);
+  if (rot == "R_I_a")
+    stored.rotation = s.R_I_a;
+  else if (rot == "R_I_w")
+    stored.rotation = s.R_I_w;
+  return ImuIntrinsics::FromStored(s.imu_model, s.g_sensitivity, stored);
+}
+
+// The cameras in Kalibr's order (cam0, cam1, ...): rig order, the base camera first in a
+// camera-only rig.
+inline std::vector<const SensorConfig*> KalibrCameras(const RigConfig& rig) {
+  std::vector<const SensorConfig*> cams;
+  if (rig.IsCameraOnly())
+    cams.push_back(&rig.Base());
+  for (const SensorConfig& s : rig.sensors) {
+    if (s.type == SensorType::kCamera && !(rig.IsCameraOnly() && s.name == rig.base_imu))
+      cams.push_back(&s);
+  }
+  return cams;
+}
+
+}  // namespace ctcal::internal
