@@ -16,6 +16,7 @@ encoding (cameras in bayer_rggb8). `dump` prints one line per message: topic, ty
 in ns, and for images encoding and size.
 """
 import argparse
+import functools
 import os
 import sqlite3
 import struct
@@ -80,6 +81,7 @@ def sensors_of(data):
     return out
 
 
+@functools.lru_cache(maxsize=64)  # a long recording may list the same few files again and again
 def image_payload(path, encoding):
     """(width, height, step, bytes, big_endian) or (format, bytes) of one grey image."""
     grey = cv2.imread(path, cv2.IMREAD_UNCHANGED)

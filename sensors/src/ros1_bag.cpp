@@ -78,6 +78,8 @@ class Ros1BagReader : public RosBagReader {
     const std::string what = e.what();
     if (what.find("unindexed") != std::string::npos)
       return what + " (the recording was cut short: `rosbag reindex` rebuilds its index)";
+    if (what.find("Error reading from file") != std::string::npos)
+      return what + " (the bag ends early: truncated while recording or copying?)";
     return what;
   }
 
