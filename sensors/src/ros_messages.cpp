@@ -235,6 +235,12 @@ void CheckRosImage(const RosImage& image) {
     throw std::runtime_error("image of " + std::to_string(image.width) + "x" +
                              std::to_string(image.height) + " pixels");
   const std::uint64_t row = std::uint64_t(image.width) * CV_ELEM_SIZE(type);
+  // OpenCV addresses rows in whole channels: a 16-bit image's step must be even.
+  if (image.step % CV_ELEM_SIZE1(type)) {
+    throw std::runtime_error("image step " + std::to_string(image.step) +
+                             " is not a multiple of its " + std::to_string(CV_ELEM_SIZE1(type)) +
+                             "-byte channels");
+  }
   if (image.step < row || std::uint64_t(image.step) * image.height > image.data.size()) {
     throw std::runtime_error("image data of " + std::to_string(image.data.size()) +
                              " bytes is smaller than step " + std::to_string(image.step) + " x " +

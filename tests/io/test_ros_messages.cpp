@@ -116,7 +116,8 @@ TEST(RosMessages, CdrImuInBothByteOrdersWithAlignment) {
 }
 
 TEST(RosMessages, StampNanosecondsBeyondASecondAreRefused) {
-  const std::vector<std::uint8_t> bytes = CdrImu(false, 1, 1000000000u, {}, {});
+  const std::vector<std::uint8_t> bytes =
+      CdrImu(false, 1, 1000000000u, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   EXPECT_THROW(DecodeRosImu(bytes.data(), bytes.size(), RosWire::kCdr), std::runtime_error);
 }
 
@@ -165,7 +166,7 @@ RosImage AsRosImage(const cv::Mat& grey, const std::string& encoding, int pad) {
 TEST(RosMessages, EveryEncodingDecodesToTheSamePixels) {
   const cv::Mat grey = Ramp();
   for (const char* e : {"mono8", "mono16", "rgb8", "bgr8", "rgba8", "bgra8"}) {
-    for (int pad : {0, 3}) {  // a step longer than the row
+    for (int pad : {0, 4}) {  // a step longer than the row
       const cv::Mat m = RosImageToMat(AsRosImage(grey, e, pad));
       ASSERT_EQ(m.size(), grey.size()) << e;
       cv::Mat back;
@@ -217,6 +218,9 @@ TEST(RosMessages, UnsupportedOrShortImagesAreClearErrors) {
         }
       },
       std::runtime_error);
+  // A 16-bit image's rows must start on whole pixels (OpenCV would throw its own exception).
+  EXPECT_THROW(CheckRosImage(AsRosImage(Ramp(), "mono16", 3)), std::runtime_error);
+  EXPECT_NO_THROW(CheckRosImage(AsRosImage(Ramp(), "rgb8", 3)));
   RosImage shortened = AsRosImage(Ramp(), "rgb8", 0);
   shortened.data.pop_back();
   EXPECT_THROW(CheckRosImage(shortened), std::runtime_error);
