@@ -16,7 +16,7 @@
 #include "ctcal/calibrator/memory_usage.h"
 #include "ctcal/calibrator/observability/motion_prediction.h"
 #include "ctcal/calibrator/observability/numeric_observability.h"
-#include "spline_problem_impl.h"
+#include "problem/spline_problem_impl.h"
 
 namespace ctcal {
 

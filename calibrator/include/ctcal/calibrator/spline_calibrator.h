@@ -91,7 +91,7 @@ struct SplineCalibratorOptions {
   // relative tolerances of 1e-10 alone (the fully converged reference).
   double stop_cost_change = 0.005;
   // The robust solve stops once the next step is predicted to lower the cost by < 1e-4 of it
-  // (spline_problem_impl.h RobustStageStop) instead of computing that step; false: Ceres'
+  // (spline_problem.h RobustStageStop) instead of computing that step; false: Ceres'
   // relative function tolerance of 1e-6 alone.
   bool robust_early_stop = true;
   // The spline solves by SolveLevenbergMarquardt (lm_solver.h: Ceres' Levenberg-Marquardt with

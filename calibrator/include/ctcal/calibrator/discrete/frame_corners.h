@@ -17,8 +17,8 @@
 //   dtheta = 2 vec(q_C_W(b) q_C_W(b_hat)^-1),   dt = t_C_W(b) - dtheta x t_C_W(b_hat)
 // (the quaternion product is the identity at b = b_hat, where the derivative of 2 vec(.) is the
 // rotation vector's). Cost, gradient and Gauss-Newton Hessian equal those of the per-corner blocks
-// (tests/calibrator/test_discrete_frame_corners.cpp); the Jet work drops from every corner (~65
-// parameters each) to one 6-output pose per frame.
+// (tests/calibrator/discrete/test_discrete_frame_corners.cpp); the Jet work drops from every corner
+// (~65 parameters each) to one 6-output pose per frame.
 #pragma once
 
 #include <ceres/ceres.h>

@@ -14,7 +14,7 @@
 //   delta = [2 vec(dR_hat^-1 dR(x_i)),  dv(x_i),  dp(x_i)]
 // (2 vec(.) has the rotation vector's derivative at the identity). The Jet passes of the
 // integration drop from (|x_s| + |x_i|) / stride to |x_i| / stride; e is cheap. The Jacobian is
-// the one-pass Jet Jacobian up to rounding (tests/calibrator/test_discrete_residuals.cpp).
+// the one-pass Jet Jacobian up to rounding (tests/calibrator/discrete/test_discrete_residuals.cpp).
 //
 // Functor requirements (AuxImuFunctor, AuxGyroFunctor, ReintegrationFactor):
 //   template <T> PreintegratedDeltas<T> Deltas(T const* const* x) const;     reads x_i only

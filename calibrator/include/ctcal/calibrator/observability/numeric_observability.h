@@ -12,7 +12,7 @@
 //   weak          a determined parameter whose data-only sigma exceeds 10x the reference: the
 //                 sigma the fully excited default rig (`ctcal simulate --scenario full`) gives
 //                 for that kind of parameter over the same duration (the table in
-//                 observability_numeric.cpp, docs/observability.md).
+//                 numeric_observability.cpp, docs/observability.md).
 // The motion half (motion, predicted_unobservable) is AnalyseMotion's (motion_prediction.h);
 // ReportObservability prints both side by side as the terminal's warning block.
 #pragma once

@@ -14,6 +14,7 @@
 #include <set>
 #include <string>
 
+#include "../simulated_recording.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/observability/motion_primitives.h"
 #include "ctcal/calibrator/observability/numeric_observability.h"
@@ -24,7 +25,6 @@
 #include "ctcal/sim/perturb.h"
 #include "ctcal/sim/scenario.h"
 #include "ctcal/sim/simulator.h"
-#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {

@@ -12,13 +12,13 @@
 #include <filesystem>
 #include <map>
 
-#include "../../calibrator/src/spline_trajectory_fit.h"
+#include "../../../calibrator/src/problem/spline_trajectory_fit.h"
+#include "../simulated_recording.h"
 #include "ctcal/calibrator/calibration_state.h"
 #include "ctcal/calibrator/spline_init.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/spline/so3.h"
-#include "simulated_recording.h"
 
 // After Eigen (opencv2/core/eigen.hpp needs it first).
 #include <opencv2/calib3d.hpp>

@@ -1,7 +1,7 @@
 // The spline and discrete calibrators' report data: the prepared data of the final solve (the
 // corners with their outlier flags, the inertial samples inside the trajectory) through the
 // measurement models of report_data_builder.h, and the correlation of the marginal covariance.
-#include "spline_problem_impl.h"
+#include "../problem/spline_problem_impl.h"
 
 namespace ctcal::spline_internal {
 

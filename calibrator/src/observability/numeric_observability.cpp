@@ -20,7 +20,8 @@ namespace {
 // data-only sigma * sqrt(T) of its kind over the default rig's sensors on an 8 s recording
 // (seed 24), rounded up to two digits, as
 // `ObservabilityCalibration.FullIsObservableAndMatchesTheReference`
-// (tests/calibrator/test_observability_calibration.cpp) prints it; docs/observability.md.
+// (tests/calibrator/observability/test_observability_calibration.cpp) prints it;
+// docs/observability.md.
 struct Reference {
   const char* kind;
   double sigma_1s;

@@ -10,10 +10,10 @@
 #include <map>
 #include <string>
 
+#include "../estimate_agreement.h"
+#include "../simulated_recording.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/sensors/compare.h"
-#include "estimate_agreement.h"
-#include "simulated_recording.h"
 
 namespace ctcal {
 namespace {

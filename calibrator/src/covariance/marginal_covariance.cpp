@@ -20,7 +20,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "normal_equations.h"
+#include "../solver/normal_equations.h"
 
 namespace ctcal {
 namespace {
