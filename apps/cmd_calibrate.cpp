@@ -21,10 +21,12 @@
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
 #include "ctcal/calibrator/discrete/crosscheck.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
+#include "ctcal/calibrator/init/bag_detection.h"
 #include "ctcal/calibrator/init/board_order.h"
 #include "ctcal/calibrator/init/corner_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/report/stage_time.h"
+#include "ctcal/sensors/bag_dataset.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/ecosystem_exports.h"
@@ -219,7 +221,8 @@ int RunCalibrate(int argc, char** argv) {
       "target", po::value(&target_path),
       "Kalibr target yaml, for a DATA folder with sensor.yaml files and no --rig")(
       "data", po::value(&data_dir)->required(),
-      "dataset folder (SPEC section 6); a camera with images but no corners.csv is detected "
+      "dataset folder (SPEC section 6), or a ROS bag (X.bag, a ROS2 bag's folder or .db3; each "
+      "sensor's rostopic: names its topic); a camera with images but no corners.csv is detected "
       "first, its corners written to OUT/<camera>/corners.csv")(
       "out", po::value(&out_dir)->required(), "output folder")(
       "method", po::value(&method)->default_value("spline"),
@@ -325,7 +328,12 @@ int RunCalibrate(int argc, char** argv) {
       }
     }
     warnings.clear();
-    data = LoadDataset(data_dir, rig, &warnings);
+    // A ROS bag is read once, its images detected as they stream (never all in memory), so its
+    // cameras arrive with their corners and DetectMissingCorners leaves them alone.
+    if (IsRosBag(data_dir))
+      data = LoadBagAndDetect(rig, data_dir, out_dir, options.threads, &warnings, nullptr, log);
+    else
+      data = LoadDataset(data_dir, rig, &warnings);
     for (const std::string& w : warnings)
       log("warning: " + w);
   } catch (const std::exception& e) {

@@ -1,5 +1,6 @@
 // `ctcal simulate --scenario NAME --seed N --out DATA [--duration S] [--rig RIG.yaml]
-//  [--perturb table4|coarse] [--images]` (SPEC section 8, issue 4): wires sim/ to the command
+//  [--perturb table4|coarse] [--images] [--bag]` (SPEC section 8, issue 4): wires sim/ to the
+//  command
 // line. Progress goes to stdout, one error line to stderr.
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/sensors/rig_yaml.h"
+#include "ctcal/sim/dataset_bag.h"
 #include "ctcal/sim/dataset_writer.h"
 #include "ctcal/sim/default_rig.h"
 #include "ctcal/sim/image_writer.h"
@@ -75,7 +77,7 @@ int RunSimulate(int argc, char** argv) {
   namespace po = boost::program_options;
   CommandLine cli("simulate",
                   "--scenario NAME --seed N --out DATA [--duration S] [--rig RIG.yaml] "
-                  "[--perturb table4|coarse] [--images]",
+                  "[--perturb table4|coarse] [--images] [--bag]",
                   "Simulate a visual-inertial rig in front of its board along an analytic "
                   "trajectory and write the dataset (SPEC section 6), its ground truth "
                   "(truth.yaml, groundtruth/, biases.csv) and an initial-guess rig.yaml.");
@@ -99,7 +101,11 @@ int RunSimulate(int argc, char** argv) {
        "probability that a visible corner is not detected")                           //
       ("images", po::bool_switch(),
        "render board images (DATA/camN/data/*.png) and write the noise-free corners to "
-       "corners_true.csv instead of corners.csv, so that the calibrator detects");
+       "corners_true.csv instead of corners.csv, so that the calibrator detects")(
+          "bag", po::bool_switch(),
+          "--images, and the same recording as one ROS1 bag DATA/recording.bag (sensor_msgs/Imu, "
+          "mono8 sensor_msgs/Image; each sensor's rostopic, /<name> or /<name>/image_raw when the "
+          "rig gives none, is written into truth.yaml and rig.yaml)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
 
@@ -122,13 +128,19 @@ int RunSimulate(int argc, char** argv) {
   } catch (const std::exception& e) {
     return cli.UsageError(e.what());
   }
-  const bool images = cli.vm()["images"].as<bool>();
+  const bool bag = cli.vm()["bag"].as<bool>();
+  const bool images = cli.vm()["images"].as<bool>() || bag;
 
   RigConfig rig;
   try {
     rig = rig_path.empty() ? sim::DefaultRig() : LoadRig(rig_path);
   } catch (const std::exception& e) {
     return cli.InputError(e.what());
+  }
+  // The bag's topics, in the rig files so that `calibrate --data DATA/recording.bag` finds them.
+  for (SensorConfig& s : rig.sensors) {
+    if (bag && !s.rostopic)
+      s.rostopic = sim::DefaultRosTopic(s);
   }
   if (const std::string why = CheckOutputFolder(out); !why.empty())
     return cli.InputError(why);
@@ -170,6 +182,11 @@ int RunSimulate(int argc, char** argv) {
           last_decile = decile;
         }
       });
+    }
+    if (bag) {
+      const std::string bag_path = (std::filesystem::path(out) / "recording.bag").string();
+      sim::WriteDatasetBag(out, rig, bag_path);
+      std::printf("  wrote %s\n", bag_path.c_str());
     }
     for (const sim::InertialData& d : data.inertial)
       std::printf("  %-8s %zu samples\n", d.sensor.c_str(), d.samples.size());

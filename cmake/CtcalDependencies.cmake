@@ -14,7 +14,7 @@ find_package(apriltag CONFIG REQUIRED)
 if(NOT TARGET apriltag::apriltag OR NOT TARGET apriltag::apriltag-utils)
   message(FATAL_ERROR "apriltag found without its apriltag::apriltag/apriltag-utils targets")
 endif()
-find_package(Boost REQUIRED COMPONENTS program_options)
+find_package(Boost REQUIRED COMPONENTS program_options filesystem)
 find_package(yaml-cpp REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(CAIRO REQUIRED IMPORTED_TARGET cairo)
@@ -37,3 +37,38 @@ endif()
 if(CTCAL_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+
+# ROS bags (SPEC section 6). Debian's librosbag-storage-dev is the ROS1 bag container without the
+# ROS runtime, but its .pc file requires a pluginlib.pc Debian does not ship, and bag.h includes
+# the ROS 2 pluginlib/class_loader headers, each under a doubled include folder
+# (/usr/include/<pkg>/<pkg>/): so the library and those folders are found one by one. The
+# messages themselves are decoded by ctcal (sensors/src/ros_wire.cpp); only the serialization
+# stream types come from roscpp_serialization, and ros::Header lives in cpp_common.
+find_library(ROSBAG_STORAGE_LIBRARY NAMES rosbag_storage)
+find_path(ROSBAG_INCLUDE_DIR NAMES rosbag/bag.h)
+set(_ctcal_ros_include_dirs ${ROSBAG_INCLUDE_DIR})
+foreach(_pkg pluginlib class_loader rcpputils rcutils ament_index_cpp)
+  find_path(_ctcal_${_pkg}_dir NAMES ${_pkg} PATHS /usr/include/${_pkg} NO_DEFAULT_PATH)
+  if(NOT _ctcal_${_pkg}_dir)
+    message(FATAL_ERROR "${_pkg} headers not found (/usr/include/${_pkg}/${_pkg}): install "
+                        "Debian's librosbag-storage-dev (make deps)")
+  endif()
+  list(APPEND _ctcal_ros_include_dirs ${_ctcal_${_pkg}_dir})
+endforeach()
+set(_ctcal_ros_libraries ${ROSBAG_STORAGE_LIBRARY})
+foreach(_lib roscpp_serialization rostime cpp_common console_bridge class_loader)
+  find_library(_ctcal_${_lib}_library NAMES ${_lib})
+  if(NOT _ctcal_${_lib}_library)
+    message(FATAL_ERROR "lib${_lib} not found: install Debian's librosbag-storage-dev (make deps)")
+  endif()
+  list(APPEND _ctcal_ros_libraries ${_ctcal_${_lib}_library})
+endforeach()
+if(NOT ROSBAG_STORAGE_LIBRARY OR NOT ROSBAG_INCLUDE_DIR)
+  message(FATAL_ERROR "rosbag_storage not found: install Debian's librosbag-storage-dev (make deps)")
+endif()
+add_library(ctcal_rosbag INTERFACE)
+target_link_libraries(ctcal_rosbag INTERFACE ${_ctcal_ros_libraries} Boost::filesystem)
+target_include_directories(ctcal_rosbag SYSTEM INTERFACE ${_ctcal_ros_include_dirs})
+add_library(ctcal::rosbag ALIAS ctcal_rosbag)
+# ROS 2 bags' default storage is an sqlite3 database.
+find_package(SQLite3 REQUIRED)

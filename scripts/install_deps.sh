@@ -16,6 +16,7 @@ PACKAGES=(
   clang-format
   poppler-utils opencv-doc visp-images-data
   chromium python3 python3-numpy python3-opencv
+  librosbag-storage-dev libsqlite3-dev python3-rosbag
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
 # libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt);
@@ -24,6 +25,11 @@ PACKAGES=(
 # library only) are called by tests; python3-numpy and python3-opencv are what the independent
 # image renderer (scripts/spec_render.py, run by /usr/bin/python3) needs; opencv-doc and visp-images-data hold real board photos the
 # detector tests read.
+# librosbag-storage-dev reads and writes ROS1 bags (`--data X.bag`, `simulate --bag`; it brings
+# roscpp_serialization, cpp_common, console_bridge, bz2 / lz4 and the pluginlib headers its bag.h
+# includes); libsqlite3-dev reads ROS2 bags' sqlite3 storage; python3-rosbag is the independent
+# ROS1 bag writer and reader the bag tests compare against (scripts/ros_bags.py). scripts/fuzz.sh
+# alone needs clang-14, libclang-rt-14-dev and libfuzzer-14-dev (not installed by default).
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -13,6 +13,7 @@
 
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/parallel_for.h"
+#include "dataset_gaps.h"
 
 namespace ctcal {
 namespace {
@@ -189,6 +190,8 @@ void Warn(Warnings* warnings, const std::string& what) {
     std::cerr << "warning: " << what << "\n";
 }
 
+}  // namespace
+
 // Intervals longer than 1.5x the median: dropped samples or frames. A warning with their count,
 // since the data stays usable (the spline bridges them) but the user should know.
 void WarnGaps(const std::string& path, const std::vector<std::int64_t>& t, Warnings* warnings) {
@@ -222,6 +225,8 @@ void WarnGaps(const std::string& path, const std::vector<std::int64_t>& t, Warni
     Warn(warnings, path + ": " + buf);
   }
 }
+
+namespace {
 
 std::ofstream OpenForWrite(const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();

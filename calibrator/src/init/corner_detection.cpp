@@ -66,6 +66,32 @@ std::string UnreadableImagesWarning(const CameraDetectionSummary& summary) {
          " images could not be read (first: " + summary.first_error + ")";
 }
 
+void FinishCameraDetection(CameraDetectionSummary* summary, const InitLog& log) {
+  CameraDetectionSummary& s = *summary;
+  const std::string& camera = s.camera;
+  if (s.unreadable == s.images)
+    throw InitError(kStage, camera, "no image could be read (first: " + s.first_error + ")");
+  if (s.with_board == 0)
+    throw InitError(kStage, camera,
+                    "the board is in none of its " + std::to_string(s.images) + " images (" +
+                        NoBoardHint(s.rejected) + ")");
+
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "%s: %s %zu images, %zu with the board, %.1f corners per view, %zu unreadable, "
+                "%.1f s",
+                kStage, camera.c_str(), s.images, s.with_board,
+                static_cast<double>(s.corners) / static_cast<double>(s.with_board), s.unreadable,
+                s.seconds);
+  s.summary = line;
+  const std::string warning = UnreadableImagesWarning(s);
+  if (log) {
+    log(s.summary);
+    if (!warning.empty())
+      log(warning);
+  }
+}
+
 std::vector<CornerObservation> DetectCameraCorners(
     const SensorConfig& sensor, const Detector& detector, const std::string& image_dir,
     const std::vector<ImageEntry>& images, CameraDetectionSummary* summary, const InitLog& log) {
@@ -107,27 +133,7 @@ std::vector<CornerObservation> DetectCameraCorners(
   }
 
   const std::vector<CornerObservation> corners = CornersFromDetections(images, results, &s);
-  if (s.unreadable == s.images)
-    throw InitError(kStage, camera, "no image could be read (first: " + s.first_error + ")");
-  if (s.with_board == 0)
-    throw InitError(kStage, camera,
-                    "the board is in none of its " + std::to_string(s.images) + " images (" +
-                        NoBoardHint(s.rejected) + ")");
-
-  char line[400];
-  std::snprintf(line, sizeof line,
-                "%s: %s %zu images, %zu with the board, %.1f corners per view, %zu unreadable, "
-                "%.1f s",
-                kStage, camera.c_str(), s.images, s.with_board,
-                static_cast<double>(s.corners) / static_cast<double>(s.with_board), s.unreadable,
-                s.seconds);
-  s.summary = line;
-  const std::string warning = UnreadableImagesWarning(s);
-  if (log) {
-    log(s.summary);
-    if (!warning.empty())
-      log(warning);
-  }
+  FinishCameraDetection(&s, log);
   if (summary)
     *summary = s;
   return corners;

@@ -44,6 +44,11 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
 // or all were unreadable (all: an error, not a warning). The first error names the file.
 std::string UnreadableImagesWarning(const CameraDetectionSummary& summary);
 
+// The end of one camera's detection (its counts in `summary`, seconds set): throws InitError when
+// no image could be read or none shows the board (with a hint from the rejections), else sets
+// summary->summary and logs it and UnreadableImagesWarning's line.
+void FinishCameraDetection(CameraDetectionSummary* summary, const InitLog& log);
+
 // Detects the board in every image of one camera (`image_dir`/<filename> for each entry of
 // `images`, the camera's data.csv) and returns the corners in SPEC section 6 rows: the image's
 // stamp, the corner id, the pixel and the detector's sigma. Logs progress per tenth of the
