@@ -220,7 +220,12 @@ bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vecto
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.num_threads = 2;
+  // One thread: Ceres hands residual blocks to its threads as they come free and sums the
+  // threads' partial costs and gradients, and its Schur eliminator adds the views' outer products
+  // to the reduced camera matrix in the order the threads finish, so on 2 threads the last bits
+  // of these intrinsics (which seed the whole calibration) changed from run to run. A run must
+  // give the same bits for the same data and --threads (docs/calibrator.md, Reproducibility).
+  solver_options.num_threads = 1;
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
