@@ -358,8 +358,9 @@ TEST(CalibrateReportCameraOnly, EurocStereo) {
   {
     std::istringstream lines(Slurp(root + "/log.txt"));
     for (std::string line; std::getline(lines, line);)
-      if (line.rfind("check failed:", 0) == 0)
+      if (line.rfind("check failed:", 0) == 0) {
         EXPECT_NE(line.find("whitened RMS"), std::string::npos) << line;
+      }
   }
   const RigConfig result = LoadRig(out + "/result.yaml");
   const std::string html = Slurp(out + "/report.html");
