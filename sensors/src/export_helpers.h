@@ -1,11 +1,16 @@
 // Private to sensors/: what the writers of other programs' files (Kalibr, basalt, OpenVINS) take
-// from a rig: an IMU's full intrinsic matrices and the cameras in the files' order.
+// from a rig: an IMU's full intrinsic matrices, the cameras in the files' order, and the YAML
+// emitters of their number lists and matrices (one flow sequence per row, as Kalibr writes them).
 #pragma once
 
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
 #include "ctcal/sensors/imu_intrinsics.h"
+#include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig.h"
 
 namespace ctcal::internal {
@@ -34,6 +39,25 @@ inline std::vector<const SensorConfig*> KalibrCameras(const RigConfig& rig) {
       cams.push_back(&s);
   }
   return cams;
+}
+
+template <typename Derived>
+void EmitMatrix(YAML::Emitter& out, const Eigen::MatrixBase<Derived>& m) {
+  out << YAML::BeginSeq;
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    out << YAML::Flow << YAML::BeginSeq;
+    for (Eigen::Index c = 0; c < m.cols(); ++c)
+      out << FormatDouble(m(r, c));
+    out << YAML::EndSeq;
+  }
+  out << YAML::EndSeq;
+}
+
+inline void EmitNumbers(YAML::Emitter& out, const std::vector<double>& v) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (double x : v)
+    out << FormatDouble(x);
+  out << YAML::EndSeq;
 }
 
 }  // namespace ctcal::internal

@@ -14,27 +14,10 @@
 namespace ctcal {
 namespace {
 
+using internal::EmitMatrix;
+using internal::EmitNumbers;
 using internal::ImuIntrinsicsOf;
 using internal::KalibrCameras;
-
-template <typename Derived>
-void EmitRows(YAML::Emitter& out, const Eigen::MatrixBase<Derived>& m) {
-  out << YAML::BeginSeq;
-  for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    out << YAML::Flow << YAML::BeginSeq;
-    for (Eigen::Index c = 0; c < m.cols(); ++c)
-      out << FormatDouble(m(r, c));
-    out << YAML::EndSeq;
-  }
-  out << YAML::EndSeq;
-}
-
-void EmitNumbers(YAML::Emitter& out, const std::vector<double>& v) {
-  out << YAML::Flow << YAML::BeginSeq;
-  for (double x : v)
-    out << FormatDouble(x);
-  out << YAML::EndSeq;
-}
 
 // M = R U with R a rotation and U upper-triangular with a positive diagonal (M invertible, det >
 // 0): Householder QR with the signs fixed.
@@ -87,7 +70,7 @@ std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::st
     }
     out << YAML::Key << "cam" + std::to_string(n) << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "T_imu_cam" << YAML::Value;
-    EmitRows(out, c.T_B_S);
+    EmitMatrix(out, c.T_B_S);
     out << YAML::Key << "cam_overlaps" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (std::size_t k = 0; k < cams.size(); ++k) {
       if (k != n)
@@ -126,7 +109,7 @@ std::optional<std::string> EmitOpenVinsImuChain(const RigConfig& rig, std::strin
   YAML::Emitter out;
   out << YAML::BeginMap << YAML::Key << "imu0" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "T_i_b" << YAML::Value;
-  EmitRows(out, Eigen::Matrix4d::Identity());
+  EmitMatrix(out, Eigen::Matrix4d::Identity());
   out << YAML::Key << "accelerometer_noise_density" << YAML::Value
       << FormatDouble(imu.noise.accelerometer_noise_density);
   out << YAML::Key << "accelerometer_random_walk" << YAML::Value
@@ -141,15 +124,15 @@ std::optional<std::string> EmitOpenVinsImuChain(const RigConfig& rig, std::strin
   out << YAML::Key << "time_offset" << YAML::Value << FormatDouble(0.0);
   out << YAML::Key << "update_rate" << YAML::Value << FormatDouble(imu.noise.update_rate);
   out << YAML::Key << "Tw" << YAML::Value;
-  EmitRows(out, Dw.inverse());
+  EmitMatrix(out, Dw.inverse());
   out << YAML::Key << "R_IMUtoGYRO" << YAML::Value;
-  EmitRows(out, R_GYROtoIMU.transpose());
+  EmitMatrix(out, R_GYROtoIMU.transpose());
   out << YAML::Key << "Ta" << YAML::Value;
-  EmitRows(out, Da.inverse());
+  EmitMatrix(out, Da.inverse());
   out << YAML::Key << "R_IMUtoACC" << YAML::Value;
-  EmitRows(out, R_ACCtoIMU.transpose());
+  EmitMatrix(out, R_ACCtoIMU.transpose());
   out << YAML::Key << "Tg" << YAML::Value;
-  EmitRows(out, in.T_g());
+  EmitMatrix(out, in.T_g());
   out << YAML::EndMap << YAML::EndMap;
   if (notes) {
     for (const SensorConfig& s : rig.sensors) {

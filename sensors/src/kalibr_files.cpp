@@ -17,28 +17,11 @@
 namespace ctcal {
 namespace {
 
+using internal::EmitMatrix;
+using internal::EmitNumbers;
 using internal::ImuIntrinsicsOf;
 using internal::Inverse;
 using internal::KalibrCameras;
-
-template <typename Derived>
-void EmitMatrix(YAML::Emitter& out, const Eigen::MatrixBase<Derived>& m) {
-  out << YAML::BeginSeq;
-  for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    out << YAML::Flow << YAML::BeginSeq;
-    for (Eigen::Index c = 0; c < m.cols(); ++c)
-      out << FormatDouble(m(r, c));
-    out << YAML::EndSeq;
-  }
-  out << YAML::EndSeq;
-}
-
-void EmitNumbers(YAML::Emitter& out, const std::vector<double>& v) {
-  out << YAML::Flow << YAML::BeginSeq;
-  for (double x : v)
-    out << FormatDouble(x);
-  out << YAML::EndSeq;
-}
 
 // Kalibr's model of an IMU, written in our frame I. SPEC fixes the files' IMU frame to ours
 // (`T_cam_imu = inverse(T_B_C)`), while Kalibr's canonical form (lower-triangular M's) lives in
