@@ -171,8 +171,9 @@ class RigReader {
   void ReadSensor(const YAML::Node& node, SensorConfig& s, const std::string& base) {
     const std::string where = Where(s.name);
     const bool is_base = s.name == base;
-    std::set<std::string> allowed = {"type",        "noise", "estimate",
-                                     "prior_sigma", "sigma", "rostopic"};
+    // noise_estimated / sigma_formal: results only, read back and ignored (SPEC section 7).
+    std::set<std::string> allowed = {"type",  "noise",    "estimate",        "prior_sigma",
+                                     "sigma", "rostopic", "noise_estimated", "sigma_formal"};
     std::string kind;
     switch (s.type) {
       case SensorType::kImu:
@@ -252,11 +253,14 @@ class RigReader {
       s.rostopic = in_.String(node["rostopic"], where + ".rostopic");
   }
 
-  void ReadInertialNoise(const YAML::Node& sensor_node, SensorConfig& s) {
-    const std::string where = Where(s.name) + ".noise";
-    const YAML::Node node = sensor_node["noise"];
+  // `key`: "noise", or a result's "noise_estimated" (same keys) into *out.
+  void ReadInertialNoise(const YAML::Node& sensor_node, SensorConfig& s,
+                         const std::string& key_name = "noise", InertialNoise* out = nullptr) {
+    const std::string where = Where(s.name) + "." + key_name;
+    const YAML::Node node = sensor_node[key_name];
     if (!node)
       in_.Fail(sensor_node, Where(s.name), "missing required key 'noise' (Kalibr's noise keys)");
+    InertialNoise& noise = out != nullptr ? *out : s.noise;
     const bool gyro = s.type == SensorType::kGyro;
     const std::set<std::string>& keys = gyro ? kGyroNoiseKeys : kImuNoiseKeys;
     // A gyro's block may be a whole Kalibr imu.yaml block (SPEC section 3): the accelerometer's
@@ -283,12 +287,17 @@ class RigReader {
     }
     if (!(v["update_rate"] > 0.0))
       in_.Fail(node["update_rate"], where, "update_rate must be > 0 (Hz)");
-    s.noise.gyroscope_noise_density = v["gyroscope_noise_density"];
-    s.noise.gyroscope_random_walk = v["gyroscope_random_walk"];
-    s.noise.update_rate = v["update_rate"];
+    noise.gyroscope_noise_density = v["gyroscope_noise_density"];
+    noise.gyroscope_random_walk = v["gyroscope_random_walk"];
+    noise.update_rate = v["update_rate"];
     if (!gyro) {
-      s.noise.accelerometer_noise_density = v["accelerometer_noise_density"];
-      s.noise.accelerometer_random_walk = v["accelerometer_random_walk"];
+      noise.accelerometer_noise_density = v["accelerometer_noise_density"];
+      noise.accelerometer_random_walk = v["accelerometer_random_walk"];
+    }
+    // A result's estimate is read back (for the report) and never used as input.
+    if (out == nullptr && sensor_node["noise_estimated"]) {
+      s.noise_estimated.emplace();
+      ReadInertialNoise(sensor_node, s, "noise_estimated", &*s.noise_estimated);
     }
   }
 
@@ -418,6 +427,13 @@ class RigReader {
         if (!(s.pixel_sigma > 0.0))
           in_.Fail(node["noise"]["pixel_sigma"], where, "noise.pixel_sigma must be > 0 (px)");
       }
+    }
+    // A result's estimate is read back (for the report) and never used as input.
+    if (node["noise_estimated"]) {
+      const YAML::Node e = node["noise_estimated"];
+      in_.CheckKeys(e, where + ".noise_estimated", {"pixel_sigma"}, "the noise of a camera");
+      if (e["pixel_sigma"])
+        s.pixel_sigma_estimated = in_.FiniteDouble(e["pixel_sigma"], where + ".noise_estimated");
     }
   }
 

@@ -56,6 +56,28 @@ void EmitSigma(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s,
   out << YAML::EndMap;
 }
 
+// `key: {...}` with the noise keys of the sensor's type (SPEC section 7).
+void EmitNoise(YAML::Emitter& out, const char* key, SensorType type, double pixel_sigma,
+               const InertialNoise& noise) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+  if (type == SensorType::kCamera) {
+    out << YAML::Key << "pixel_sigma" << YAML::Value << FormatDouble(pixel_sigma);
+  } else {
+    out << YAML::Key << "gyroscope_noise_density" << YAML::Value
+        << FormatDouble(noise.gyroscope_noise_density);
+    out << YAML::Key << "gyroscope_random_walk" << YAML::Value
+        << FormatDouble(noise.gyroscope_random_walk);
+    if (type == SensorType::kImu) {
+      out << YAML::Key << "accelerometer_noise_density" << YAML::Value
+          << FormatDouble(noise.accelerometer_noise_density);
+      out << YAML::Key << "accelerometer_random_walk" << YAML::Value
+          << FormatDouble(noise.accelerometer_random_walk);
+    }
+    out << YAML::Key << "update_rate" << YAML::Value << FormatDouble(noise.update_rate);
+  }
+  out << YAML::EndMap;
+}
+
 void EmitSensor(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s) {
   const bool is_base = s.name == rig.base_imu;
   out << YAML::Key << s.name << YAML::Value << YAML::BeginMap;
@@ -96,23 +118,12 @@ void EmitSensor(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s)
         << s.height << YAML::EndSeq;
     out << YAML::Key << "line_delay" << YAML::Value << FormatDouble(s.line_delay);
   }
-  out << YAML::Key << "noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  if (s.type == SensorType::kCamera) {
-    out << YAML::Key << "pixel_sigma" << YAML::Value << FormatDouble(s.pixel_sigma);
-  } else {
-    out << YAML::Key << "gyroscope_noise_density" << YAML::Value
-        << FormatDouble(s.noise.gyroscope_noise_density);
-    out << YAML::Key << "gyroscope_random_walk" << YAML::Value
-        << FormatDouble(s.noise.gyroscope_random_walk);
-    if (s.type == SensorType::kImu) {
-      out << YAML::Key << "accelerometer_noise_density" << YAML::Value
-          << FormatDouble(s.noise.accelerometer_noise_density);
-      out << YAML::Key << "accelerometer_random_walk" << YAML::Value
-          << FormatDouble(s.noise.accelerometer_random_walk);
-    }
-    out << YAML::Key << "update_rate" << YAML::Value << FormatDouble(s.noise.update_rate);
-  }
-  out << YAML::EndMap;
+  EmitNoise(out, "noise", s.type, s.pixel_sigma, s.noise);
+  // The noise the data show (results only): beside the stated one, same keys.
+  if (s.type == SensorType::kCamera && s.pixel_sigma_estimated)
+    EmitNoise(out, "noise_estimated", s.type, *s.pixel_sigma_estimated, s.noise);
+  else if (s.type != SensorType::kCamera && s.noise_estimated)
+    EmitNoise(out, "noise_estimated", s.type, s.pixel_sigma, *s.noise_estimated);
   if (!is_base) {
     out << YAML::Key << "T_B_S" << YAML::Value;
     EmitMatrix(out, s.T_B_S);

@@ -88,6 +88,9 @@ RigConfig RandomResult(std::uint64_t seed) {
   imu0.sigma.values["Dw"] = {1e-3, std::numeric_limits<double>::infinity(), 0.0, 1e-9, 2.5, 3};
   imu0.sigma.values["R_I_a"] = {std::numeric_limits<double>::quiet_NaN(), 1e-4, 1e-4};
   imu0.rostopic = "/imu0";
+  imu0.noise_estimated = imu0.noise;
+  imu0.noise_estimated->gyroscope_noise_density = std::abs(RandomDouble(rng));
+  imu0.noise_estimated->accelerometer_noise_density = std::abs(RandomDouble(rng));
 
   SensorConfig imu1 = imu0;
   imu1.name = "imu1";
@@ -104,6 +107,7 @@ RigConfig RandomResult(std::uint64_t seed) {
   imu1.prior_sigma.values["time_offset"] = {std::numeric_limits<double>::infinity()};
   imu1.prior_sigma.values["t_B_S"] = {0.01, 0.02, 0.03};
   imu1.rostopic.reset();
+  imu1.noise_estimated.reset();
   rig.sensors.push_back(imu1);
 
   SensorConfig gyro;
@@ -127,6 +131,7 @@ RigConfig RandomResult(std::uint64_t seed) {
   cam0.distortion_model = "none";
   cam0.line_delay = 3.1e-5;
   cam0.pixel_sigma = 0.35;
+  cam0.pixel_sigma_estimated = 0.123456789012345678;
   cam0.T_B_S = RandomPose(rng);
   cam0.time_offset = 1e-17;
   cam0.estimate = {EstimateItem::kIntrinsics, EstimateItem::kExtrinsics, EstimateItem::kTimeOffset,

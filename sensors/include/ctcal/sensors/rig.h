@@ -77,6 +77,12 @@ struct SensorConfig {
   std::set<EstimateItem> estimate;
   SigmaBlock prior_sigma;  // empty: no prior
   SigmaBlock sigma;        // results only; ignored as input
+  // Results only, read back and ignored as input (SPEC section 7): the noise the data show
+  // (variance component estimation, docs/noise_estimation.md), same keys as `noise:` (inertial:
+  // every key of InertialNoise; camera: `pixel_sigma`, the median of its corners' estimated
+  // sigmas).
+  std::optional<InertialNoise> noise_estimated;
+  std::optional<double> pixel_sigma_estimated;
   std::optional<std::string> rostopic;
 
   bool Estimates(EstimateItem e) const { return estimate.count(e) > 0; }
