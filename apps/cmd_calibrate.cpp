@@ -211,7 +211,7 @@ int RunCalibrate(int argc, char** argv) {
                   "every check of the report passed; 3: the result and report are written but a "
                   "check failed (each named on stderr); 1: the run failed; 2: bad input.");
   std::string rig_path, target_path, data_dir, out_dir, method, representation, init_policy,
-      aux_velocity, split_frame_rows;
+      aux_velocity, split_frame_rows, noise_policy;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
   cli.options().add_options()(
@@ -253,7 +253,10 @@ int RunCalibrate(int argc, char** argv) {
       "coarse-guess initialisation (docs/initialisation.md): beyond-prior (replace guesses "
       "without prior_sigma, and those the data contradict), always, off")(
       "max-iterations", po::value(&options.max_iterations)->default_value(50),
-      "Levenberg-Marquardt iterations per solve");
+      "Levenberg-Marquardt iterations per solve")(
+      "noise", po::value(&noise_policy)->default_value("estimate"),
+      "spline: estimate (every sensor's noise from the data, the stated noise the start; "
+      "docs/noise_estimation.md) or stated (the rig file's noise weighs everything)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
@@ -280,6 +283,9 @@ int RunCalibrate(int argc, char** argv) {
     return cli.UsageError("--split-frame-rows must be auto, on or off, got " + split_frame_rows);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  if (noise_policy != "estimate" && noise_policy != "stated")
+    return cli.UsageError("--noise must be estimate or stated, got " + noise_policy);
+  options.estimate_noise = noise_policy == "estimate";
   try {
     CheckOptions(options);  // before any data are read
   } catch (const CalibrationInputError& e) {

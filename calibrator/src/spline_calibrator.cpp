@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "ctcal/calibrator/init/coarse_init.h"
+#include "ctcal/calibrator/knot_fit.h"
 #include "ctcal/calibrator/knot_spacing.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/memory_usage.h"
@@ -143,9 +144,28 @@ void Prepare(CalibrationState* state, const std::map<std::string, SensorData>& d
     const InertialNoise& n = base.config.noise;
     const MotionBandwidth bw =
         ChooseKnotSpacing(t, w, a, n.GyroSampleSigma(), n.AccelSampleSigma());
+    log(Fmt("  motion bandwidth: gyro %.2f Hz, accel %.2f Hz (the bandwidth rule: %.4f s)",
+            bw.gyro_hz, bw.accel_hz, bw.knot_spacing_s));
     prep->knot_spacing_s = bw.knot_spacing_s;
-    log(Fmt("  motion bandwidth: gyro %.2f Hz, accel %.2f Hz -> knot spacing %.4f s", bw.gyro_hz,
-            bw.accel_hz, bw.knot_spacing_s));
+    // The spacing itself from how well splines of each spacing fit the base IMU's signals per
+    // window (knot_fit.h): the bandwidth rule's spacing, with the stated noise as its floor, left
+    // the IMU residuals of a real recording 32 % redundancy (docs/noise_estimation.md).
+    if (options.knot_spacing_by_fit) {
+      KnotFitOptions fit_options;
+      fit_options.order = options.order;
+      const KnotFitChoice fit = ChooseKnotSpacingByFit(t, w, a, fit_options);
+      prep->knot_spacing_s = fit.knot_spacing_s;
+      std::string ladder;
+      for (const KnotFitCandidate& c : fit.candidates) {
+        ladder += Fmt(" %.4f:%.2f", c.spacing_s, c.share_excess);
+        if (c.share_excess > fit_options.misfit_tolerance)
+          break;
+      }
+      log("  knot spacing by fit (spacing s: excess variance of the " +
+          Fmt("%.0f %% best-fitted 2 s windows of the base IMU, allowed %.2f):",
+              100.0 * fit_options.window_share, fit_options.misfit_tolerance) +
+          ladder + Fmt(" -> %.4f s", fit.knot_spacing_s));
+    }
   }
 
   // Samples whose base time lies inside the trajectory, kept 10 ms plus the sensor's remaining
@@ -387,6 +407,20 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
     }
     r.rms_whitened = std::sqrt((wg + wa) / (static_cast<double>(m) * n));
     result.residuals[name] = r;
+    // Per noise window (~2 s): where the residuals are noise and where spline misfit.
+    std::string windows;
+    auto& rms = out->window_rms_whitened[name];
+    rms.clear();
+    for (std::size_t w = 0; w < in.window_samples.size(); ++w) {
+      if (in.window_samples[w] == 0)
+        continue;
+      const double k = 3.0 * static_cast<double>(in.window_samples[w]);
+      rms.emplace_back(std::sqrt(in.window_gyro[w] / k), std::sqrt(in.window_accel[w] / k));
+      windows += imu ? Fmt(" %.2f/%.2f", rms.back().first, rms.back().second)
+                     : Fmt(" %.2f", rms.back().first);
+    }
+    log("  " + name + " whitened RMS per 2 s window (" + (imu ? "gyro/accel" : "gyro") +
+        "):" + windows);
   }
   for (const auto& [name, r] : result.residuals) {
     char line[256];
@@ -394,9 +428,14 @@ void FinishResult(ceres::Problem& problem, CalibrationState& state,
                   *r.rms_whitened, static_cast<long long>(r.count));
     log(line);
     if (*r.rms_whitened > 1.5 || *r.rms_whitened < 0.67) {
-      const std::string w = "warning: sensors." + name + ": whitened residual RMS " +
-                            Fmt("%.3f", *r.rms_whitened) +
-                            " is far from 1: its stated noise (noise: / pixel_sigma) is wrong";
+      // With the noise estimated, what is left is the share of the residuals' degrees of freedom
+      // the trajectory takes (sqrt(r / n)) or a model error.
+      const std::string w =
+          "warning: sensors." + name + ": whitened residual RMS " + Fmt("%.3f", *r.rms_whitened) +
+          (options.estimate_noise
+               ? " is far from 1 with the estimated noise: the trajectory absorbs much of the "
+                 "residuals (knots too fine) or the model does not fit"
+               : " is far from 1: its stated noise (noise: / pixel_sigma) is wrong");
       log("  " + w);
       out->warnings.push_back(w);
     }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -120,6 +121,13 @@ class Builder {
   Section InertialSection(const SensorConfig& s);
   void DistortionFigure(Section* sec, const SensorConfig& s) const;
   Section CameraSection(const SensorConfig& s);
+  void WhitenedFrameFigure(
+      Section* sec, const std::string& camera,
+      const std::map<int, std::pair<double, std::pair<double, int>>>& per_frame,
+      const std::map<int, double>& whitened) const;
+  // One row per stated noise quantity with the estimate beside it (header first; only a header
+  // when the result has no estimate).
+  std::vector<std::vector<std::string>> NoiseRows() const;
   Section Histograms();
   Section CorrelationSection();
   Section ObservabilitySection();

@@ -1,4 +1,5 @@
 // The report's per-sensor pages: the trajectory, each inertial sensor, each camera.
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -119,10 +120,12 @@ Section Builder::InertialSection(const SensorConfig& s) {
       h.Histogram(dt, 1, lo - 0.5, lo + 0.5, "", PaletteColor(0));
     sec.figures.push_back(f);
   }
+  // Whitened by the noise the solve used: the estimate where the calibrator made one.
+  const InertialNoise& noise = s.noise_estimated ? *s.noise_estimated : s.noise;
   if (g != data_.gyro.end())
-    InertialFigures(&sec, s, g->second, "gyro", "rad/s", s.noise.GyroSampleSigma());
+    InertialFigures(&sec, s, g->second, "gyro", "rad/s", noise.GyroSampleSigma());
   if (a != data_.accel.end())
-    InertialFigures(&sec, s, a->second, "accel", "m/s^2", s.noise.AccelSampleSigma());
+    InertialFigures(&sec, s, a->second, "accel", "m/s^2", noise.AccelSampleSigma());
   if (b != data_.bias.end()) {
     const bool both = !b->second.gyro.empty() && !b->second.accel.empty();
     auto f =
@@ -204,6 +207,50 @@ void Builder::DistortionFigure(Section* sec, const SensorConfig& s) const {
     sec->figures.push_back(f);
 }
 
+// The per-image whitened RMS (each corner by the sigma the solve weighed it with) over time and
+// against the base's angular speed at the image (from the trajectory): ~1 and flat when the noise
+// model holds; rising with speed when blur or timing errors grow that the weights miss.
+void Builder::WhitenedFrameFigure(
+    Section* sec, const std::string& camera,
+    const std::map<int, std::pair<double, std::pair<double, int>>>& per_frame,
+    const std::map<int, double>& whitened) const {
+  std::vector<double> ft, fw, speed, sw;
+  const auto& traj = data_.trajectory;
+  for (const auto& [k, pf] : per_frame) {
+    const double rms = std::sqrt(whitened.at(k) / (2.0 * std::max(pf.second.second, 1)));
+    ft.push_back(pf.first);
+    fw.push_back(rms);
+    // The angular speed between the trajectory samples around the image.
+    const std::int64_t t_ns = t0_ + static_cast<std::int64_t>(std::llround(pf.first * 1e9));
+    const auto it =
+        std::lower_bound(traj.begin(), traj.end(), t_ns,
+                         [](const PoseSample& p, std::int64_t t) { return p.t_ns < t; });
+    if (it == traj.begin() || it == traj.end())
+      continue;
+    const PoseSample& a = *(it - 1);
+    const double dt = 1e-9 * static_cast<double>(it->t_ns - a.t_ns);
+    if (dt > 0.0) {
+      speed.push_back(Eigen::AngleAxisd(a.q_W_B.conjugate() * it->q_W_B).angle() / dt);
+      sw.push_back(rms);
+    }
+  }
+  if (ft.empty())
+    return;
+  auto f = NewFigure("fig-" + camera + "-whitened", camera + ": per-image whitened RMS", 1, 2);
+  const auto panel = [&](const std::string& title, const std::string& x_label,
+                         const std::vector<double>& x, const std::vector<double>& y) {
+    auto& p = f->Add<XYPlot>();
+    p.title = title;
+    p.x_label = x_label;
+    p.y_label = "whitened RMS";
+    p.Scatter(x, y, "", PaletteColor(0), 1.8);
+    p.HLine(1.0, "1", PaletteColor(3));
+  };
+  panel("per-image whitened RMS over time", "time [s]", ft, fw);
+  panel("against the angular speed", "angular speed [rad/s]", speed, sw);
+  sec->figures.push_back(f);
+}
+
 Section Builder::CameraSection(const SensorConfig& s) {
   Section sec("sec-camera-" + s.name,
               "Camera " + s.name + " (" + s.camera_model + ", " + s.distortion_model + ")");
@@ -215,6 +262,7 @@ Section Builder::CameraSection(const SensorConfig& s) {
   const auto& c = it->second;
   std::vector<double> du, dv, frame, u, v, ou, ov;
   std::map<int, std::pair<double, std::pair<double, int>>> per_frame;  // t, (sum sq, n)
+  std::map<int, double> per_frame_whitened;                            // sum of whitened^2
   for (const auto& r : c) {
     if (r.outlier) {
       ou.push_back(r.u);
@@ -230,6 +278,7 @@ Section Builder::CameraSection(const SensorConfig& s) {
     pf.first = Sec(r.t_ns);
     pf.second.first += r.du * r.du + r.dv * r.dv;
     pf.second.second += 1;
+    per_frame_whitened[r.frame] += r.whitened * r.whitened;
   }
   const double W = s.width > 0 ? s.width : 1, H = s.height > 0 ? s.height : 1;
   {
@@ -255,8 +304,11 @@ Section Builder::CameraSection(const SensorConfig& s) {
     // What a frame's RMS scatters about when the stated noise holds.
     if (s.pixel_sigma > 0)
       t.HLine(s.pixel_sigma, "pixel_sigma", PaletteColor(3));
+    if (s.pixel_sigma_estimated)
+      t.HLine(*s.pixel_sigma_estimated, "estimated", PaletteColor(2));
     sec.figures.push_back(f);
   }
+  WhitenedFrameFigure(&sec, s.name, per_frame, per_frame_whitened);
   {
     auto f = NewFigure("fig-" + s.name + "-image", s.name + ": over the image", 1, 2);
     auto& cov = f->Add<XYPlot>();

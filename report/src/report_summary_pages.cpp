@@ -75,6 +75,12 @@ Section Builder::Summary(const std::vector<Check>& checks) {
       << "<a href=\"#sec-parameters\">the parameter table</a>)</h3>" << HtmlTable(params, "params");
   }
 
+  const std::vector<std::vector<std::string>> noise = NoiseRows();
+  if (noise.size() > 1) {
+    h << "<h3>Noise: stated vs estimated from the data (the estimate weighs the solve; "
+      << "ctcal's docs/noise_estimation.md)</h3>" << HtmlTable(noise);
+  }
+
   const std::vector<std::string> kalibr = KalibrPasteLines();
   auto& kt = fig->Add<TextPanel>();
   kt.title = "Kalibr (camchain-imucam.yaml / imu.yaml)";
@@ -94,6 +100,31 @@ Section Builder::Summary(const std::vector<Check>& checks) {
   sec.html = h.str();
   sec.figures.push_back(fig);
   return sec;
+}
+
+std::vector<std::vector<std::string>> Builder::NoiseRows() const {
+  std::vector<std::vector<std::string>> rows = {
+      {"sensor", "quantity", "stated", "estimated", "estimated / stated"}};
+  const auto add = [&](const std::string& sensor, const std::string& key, double stated,
+                       double estimated) {
+    rows.push_back({sensor, key, FormatNumber(stated, 4), FormatNumber(estimated, 4),
+                    stated > 0.0 ? FormatNumber(estimated / stated, 3) : "-"});
+  };
+  for (const SensorConfig& s : rig_.sensors) {
+    if (s.type == SensorType::kCamera) {
+      if (s.pixel_sigma_estimated)
+        add(s.name, "pixel_sigma [px]", s.pixel_sigma, *s.pixel_sigma_estimated);
+      continue;
+    }
+    if (!s.noise_estimated)
+      continue;
+    add(s.name, "gyroscope_noise_density", s.noise.gyroscope_noise_density,
+        s.noise_estimated->gyroscope_noise_density);
+    if (s.type == SensorType::kImu)
+      add(s.name, "accelerometer_noise_density", s.noise.accelerometer_noise_density,
+          s.noise_estimated->accelerometer_noise_density);
+  }
+  return rows;
 }
 
 // One row per calibrated quantity (sensor and key): its components as value +- sigma, in the

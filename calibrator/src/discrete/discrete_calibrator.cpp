@@ -34,6 +34,10 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
   so.min_views = options.min_views;
   so.compute_covariance = options.compute_covariance;
   so.stop_cost_change = options.stop_cost_change;
+  // The stated noise and the bandwidth rule's knots, as before the spline method's noise
+  // estimation (docs/noise_estimation.md covers the spline method only).
+  so.estimate_noise = false;
+  so.knot_spacing_by_fit = false;
 
   log("[1/6] rig: " + std::to_string(rig.sensors.size()) + " sensors, base " + rig.base_imu +
       " (discrete, aux velocity " +

@@ -26,6 +26,7 @@
 #include "ctcal/calibrator/calibration_state.h"
 #include "ctcal/calibrator/lm_solver.h"
 #include "ctcal/calibrator/memory_usage.h"
+#include "ctcal/calibrator/noise/variance_components.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/calibrator/residuals/residual_support.h"
 
@@ -88,6 +89,7 @@ struct CornerResiduals {
   std::string camera;
   std::vector<Eigen::Vector2d> whitened;
   std::vector<double> sigma_px;
+  std::vector<std::int32_t> frame;  // the corner's frame (index into the camera's frame stamps)
 };
 
 // The squared whitened residuals of one inertial sensor's samples, summed (the statistics).
@@ -96,12 +98,41 @@ struct InertialResidualSums {
   double gyro = 0.0;   // over the gyroscope's 3 rows of every sample
   double accel = 0.0;  // over the accelerometer's 3 rows (IMUs only)
   std::int64_t samples = 0;
+  // The same per noise window (PreparedInertial::WindowOf).
+  std::vector<double> window_gyro;
+  std::vector<double> window_accel;
+  std::vector<std::int64_t> window_samples;
 };
+
+// The noise windows of an inertial sensor: runs of whole bias-spline segments of ~2 s, so that a
+// compressed or stacked block (which shares one bias segment) lies in one window.
+inline constexpr double kNoiseWindowS = 2.0;
 
 struct PreparedInertial {
   SensorState* state = nullptr;
   std::vector<ImuSample> imu;    // type imu, samples inside the trajectory's time range
   std::vector<GyroSample> gyro;  // type gyro
+  // Per noise window, its white-noise sigmas relative to the sensor's (the noise estimation's
+  // per-window scales; empty: 1 everywhere).
+  std::vector<double> window_gyro_scale;
+  std::vector<double> window_accel_scale;
+
+  int BiasSegmentsPerWindow() const {
+    const double dt = state->bias_gyro.timing.dt_s();
+    return std::max(1, static_cast<int>(std::lround(kNoiseWindowS / dt)));
+  }
+  int WindowOf(int bias_segment) const { return bias_segment / BiasSegmentsPerWindow(); }
+  int NumWindows() const { return WindowOf(state->bias_gyro.NumKnots() - 2) + 1; }
+  double GyroScale(int bias_segment) const {
+    return window_gyro_scale.empty()
+               ? 1.0
+               : window_gyro_scale[static_cast<std::size_t>(WindowOf(bias_segment))];
+  }
+  double AccelScale(int bias_segment) const {
+    return window_accel_scale.empty()
+               ? 1.0
+               : window_accel_scale[static_cast<std::size_t>(WindowOf(bias_segment))];
+  }
 };
 
 struct Prepared {
@@ -290,6 +321,19 @@ class SplineProblem {
 
   void Finish(SplineCalibrationResult* out);
 
+  // --- noise estimation (spline_problem_noise.h) ---
+
+  // The whitened residual of every corner left and the inertial sums, at the current values.
+  void CollectResiduals(std::vector<CornerResiduals>* corners,
+                        std::vector<InertialResidualSums>* inertial);
+  // Every noise group's e^T W e, n and hat-matrix trace at the current values: the cameras in
+  // prep order, then each inertial sensor's gyro rows and (IMUs) accelerometer rows. `corners`
+  // and `inertial` (optional) receive the residuals they were summed from (per-frame and
+  // per-window weights).
+  std::vector<VarianceComponent> NoiseComponents(
+      const RedundancyOptions& options, std::vector<CornerResiduals>* corners = nullptr,
+      std::vector<InertialResidualSums>* inertial = nullptr);
+
   // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
   // global-shutter camera (line_delay 0 and not estimated); rolling shutter reads every corner at
   // its own row time, so its corners keep one block each.
@@ -458,6 +502,10 @@ class SplineProblem {
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;
+  std::vector<std::vector<ceres::ResidualBlockId>> camera_ids_;  // per prep camera
+  // Per inertial sensor: its blocks hold whole samples' rows (one per sample or stacked), not a
+  // compressed factor that mixes the gyro and accelerometer rows (NoiseComponents).
+  std::vector<bool> inertial_rows_per_sample_;
   std::vector<ceres::ResidualBlockId> prior_ids_;
   std::vector<int> segments_;
   std::vector<std::vector<HeldCorner>> kept_corners_;  // frames with outliers removed

@@ -53,6 +53,8 @@ void SplineProblem<N, Rep>::Build(bool robust) {
   problem_ = std::make_unique<ceres::Problem>(po);
   kept_corners_.clear();
   inertial_ids_.clear();
+  camera_ids_.clear();
+  inertial_rows_per_sample_.clear();
   prior_ids_.clear();
   segments_.clear();
   ceres::Problem& P = *problem_;
@@ -76,8 +78,10 @@ void SplineProblem<N, Rep>::Build(bool robust) {
       P.AddParameterBlock(b.values, b.ambient_size);
   }
 
-  for (PreparedCamera& cam : prep_.cameras)
+  for (PreparedCamera& cam : prep_.cameras) {
+    camera_ids_.emplace_back();
     AddCamera(&cam, robust);
+  }
   for (PreparedInertial& in : prep_.inertial)
     AddInertial(in);
   AddPriors();
@@ -130,20 +134,21 @@ void SplineProblem<N, Rep>::AddCameraFrames(PreparedCamera* cam, bool robust) {
       count = static_cast<int>(kept_corners_.back().size());
     }
     const std::vector<double*> blocks = FrameCornersResidual<N, Rep>::Blocks(p);
+    std::vector<ceres::ResidualBlockId>& ids = camera_ids_.back();
     if (!split) {
-      problem_->AddResidualBlock(
+      ids.push_back(problem_->AddResidualBlock(
           MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, board_W, clock, huber),
-          nullptr, blocks);
+          nullptr, blocks));
       return;
     }
-    problem_->AddResidualBlock(
+    ids.push_back(problem_->AddResidualBlock(
         MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, board_W, clock, huber,
                                          FrameRows::kPose),
-        nullptr, blocks);
-    problem_->AddResidualBlock(
+        nullptr, blocks));
+    ids.push_back(problem_->AddResidualBlock(
         MakeFrameCornersResidual<N, Rep>(s.camera->type(), corners, count, board_W, clock, huber,
                                          FrameRows::kIntrinsics, blocks),
-        nullptr, p.params);
+        nullptr, p.params));
   });
 }
 
@@ -173,7 +178,8 @@ void SplineProblem<N, Rep>::AddCamera(PreparedCamera* cam, bool robust) {
         MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(), cam->Measurement(i), clock);
     if (robust)
       loss = new ceres::HuberLoss(options_.huber_threshold);
-    problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p));
+    camera_ids_.back().push_back(
+        problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p)));
   }
 }
 
@@ -198,9 +204,12 @@ void SplineProblem<N, Rep>::VisitSamples(PreparedInertial& in, F&& f) {
     set->functors.reserve(in.imu.size());
     ImuSampleSetup setup;
     setup.layout = s.imu->layout();
-    setup.W = ImuWhitening::Of(noise);
+    const ImuWhitening W = ImuWhitening::Of(noise);
     for (const ImuSample& z : in.imu) {
       place(z, set, &setup);
+      // The sample's noise window's own level (the noise estimation; 1 before it).
+      setup.W.inv_sigma_gyro = W.inv_sigma_gyro / in.GyroScale(set->bseg.back());
+      setup.W.inv_sigma_accel = W.inv_sigma_accel / in.AccelScale(set->bseg.back());
       set->functors.emplace_back(setup);
     }
   };
@@ -243,8 +252,10 @@ void SplineProblem<N, Rep>::VisitSamples(PreparedInertial& in, F&& f) {
     GyroSampleSetup setup;
     setup.model = s.gyro->model();
     setup.inv_sigma = 1.0 / noise.GyroSampleSigma();
+    const double inv_sigma = setup.inv_sigma;
     for (const GyroSample& z : in.gyro) {
       place(z, &set, &setup);
+      setup.inv_sigma = inv_sigma / in.GyroScale(set.bseg.back());
       set.functors.push_back(typename R::Functor{setup});
     }
     f(set, [&](int seg, int bseg) {
@@ -283,6 +294,7 @@ void SplineProblem<N, Rep>::AddInertial(PreparedInertial& in) {
   SensorState& s = *in.state;
   const InertialNoise& noise = s.config.noise;
   std::vector<ceres::ResidualBlockId> ids;
+  bool per_sample = true;
   VisitSamples(in, [&](auto& set, auto&& blocks_of) {
     using R = typename std::decay_t<decltype(set)>::Residual;
     segments_.insert(segments_.end(), set.seg.begin(), set.seg.end());
@@ -293,6 +305,7 @@ void SplineProblem<N, Rep>::AddInertial(PreparedInertial& in) {
     const bool stacked = compressed == 0 && options_.analytic && options_.compress_inertial &&
                          options_.stacked_inertial_segments > 0;
     const int K = stacked ? std::min(options_.stacked_inertial_segments, 255) : compressed;
+    per_sample = per_sample && (K == 0 || stacked);
     if (K == 0) {
       for (std::size_t i = 0; i < count; ++i) {
         const typename R::Setup& setup = set.functors[i].s;
@@ -370,6 +383,7 @@ void SplineProblem<N, Rep>::AddInertial(PreparedInertial& in) {
         nullptr, s.bias_accel.Knot(k), s.bias_accel.Knot(k + 1));
   }
   inertial_ids_.emplace_back(s.name(), std::move(ids));
+  inertial_rows_per_sample_.push_back(per_sample);
 }
 
 template <int N, Se3Representation Rep>

@@ -5,4 +5,5 @@
 
 #include "spline_problem.h"
 #include "spline_problem_build.h"
+#include "spline_problem_noise.h"
 #include "spline_problem_solve.h"

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "spline_problem.h"
+#include "spline_problem_noise.h"
 
 namespace ctcal {
 namespace spline_internal {
@@ -168,9 +169,11 @@ std::string SplineProblem<N, Rep>::NextRebuild() {
 }
 
 template <int N, Se3Representation Rep>
-void SplineProblem<N, Rep>::Finish(SplineCalibrationResult* out) {
+void SplineProblem<N, Rep>::CollectResiduals(std::vector<CornerResiduals>* corners_out,
+                                             std::vector<InertialResidualSums>* inertial_out) {
   // Every corner on its own (the problem may hold them compressed), one camera per thread.
-  std::vector<CornerResiduals> corners(prep_.cameras.size());
+  std::vector<CornerResiduals>& corners = *corners_out;
+  corners.assign(prep_.cameras.size(), CornerResiduals{});
   ParallelFor(options_.threads, prep_.cameras.size(), [&](std::size_t k) {
     const PreparedCamera& cam = prep_.cameras[k];
     CornerResiduals& c = corners[k];
@@ -181,26 +184,43 @@ void SplineProblem<N, Rep>::Finish(SplineCalibrationResult* out) {
         continue;
       c.whitened.push_back(e);
       c.sigma_px.push_back(cam.corners[i].sigma_px);
+      c.frame.push_back(cam.corners[i].frame);
     }
   });
   // Inertial samples one by one too (the problem may hold them compressed per run of segments).
-  std::vector<InertialResidualSums> inertial;
+  std::vector<InertialResidualSums>& inertial = *inertial_out;
+  inertial.clear();
   for (PreparedInertial& in : prep_.inertial) {
     InertialResidualSums sums;
     sums.sensor = in.state->name();
+    const auto windows = static_cast<std::size_t>(in.NumWindows());
+    sums.window_gyro.assign(windows, 0.0);
+    sums.window_accel.assign(windows, 0.0);
+    sums.window_samples.assign(windows, 0);
     VisitSamples(in, [&](auto& set, auto&& blocks_of) {
       using R = typename std::decay_t<decltype(set)>::Residual;
       double r[R::kNumResiduals];
       for (std::size_t i = 0; i < set.functors.size(); ++i) {
         const std::vector<double*> blocks = blocks_of(set.seg[i], set.bseg[i]);
         R::Analytic::EvaluateSample(set.functors[i], blocks.data(), r, nullptr);
-        for (int k = 0; k < R::kNumResiduals; ++k)
+        const auto w = static_cast<std::size_t>(in.WindowOf(set.bseg[i]));
+        for (int k = 0; k < R::kNumResiduals; ++k) {
           (k < 3 ? sums.gyro : sums.accel) += r[k] * r[k];
+          (k < 3 ? sums.window_gyro : sums.window_accel)[w] += r[k] * r[k];
+        }
+        ++sums.window_samples[w];
       }
       sums.samples += static_cast<std::int64_t>(set.functors.size());
     });
     inertial.push_back(sums);
   }
+}
+
+template <int N, Se3Representation Rep>
+void SplineProblem<N, Rep>::Finish(SplineCalibrationResult* out) {
+  std::vector<CornerResiduals> corners;
+  std::vector<InertialResidualSums> inertial;
+  CollectResiduals(&corners, &inertial);
   // The covariance from the last solve's normal equations at its final point, where it has them.
   std::optional<SolvedInformation> solved;
   if (solver_ != nullptr) {
@@ -332,8 +352,19 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
     LogMemory(log, "solved");
     return s;
   };
-  const ceres::Solver::Summary last = RunStages(&sp, solve, options.outlier_probability,
-                                                options.max_rebucket_rounds, log, &out->outliers);
+  ceres::Solver::Summary last = RunStages(&sp, solve, options.outlier_probability,
+                                          options.max_rebucket_rounds, log, &out->outliers);
+  std::optional<StatedNoise> stated;
+  if (options.estimate_noise && options.noise_rounds > 0) {
+    stated = KeepStatedNoise(*prep);
+    EstimateNoise(
+        &sp, prep,
+        [&](const char* what) {
+          last = solve(what);
+          return last;
+        },
+        options, log, out);
+  }
   out->iterations = iterations;
   out->solve_seconds = solve_seconds;
   out->seconds_per_iteration = iterations > 0 ? solve_seconds / iterations : 0.0;
@@ -347,6 +378,8 @@ void RunPipeline(Prepared* prep, const SplineCalibratorOptions& options, const C
   const auto t_cov = Clock::now();
   const std::clock_t cpu_cov = std::clock();
   sp.Finish(out);
+  if (stated)
+    ReportNoise(*stated, *prep, log, out);
   sp.ReleaseProblem();  // the report data need the spline only
   ReleaseFreedMemory();
   out->covariance_seconds = std::chrono::duration<double>(Clock::now() - t_cov).count();

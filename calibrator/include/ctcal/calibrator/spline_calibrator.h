@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "ctcal/calibrator/init/coarse_init.h"
+#include "ctcal/calibrator/noise/variance_components.h"
 #include "ctcal/report/report_data.h"
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/rig.h"
@@ -44,8 +45,10 @@ class CalibrationFailure : public std::runtime_error {
 struct SplineCalibratorOptions {
   int order = 4;  // trajectory spline order N: 4, 5 or 6
   Se3Representation representation = Se3Representation::kSplit;
-  // Knot spacing of the trajectory (s); 0 = from the motion's bandwidth (knot_spacing.h).
+  // Knot spacing of the trajectory (s); 0 = from the data: by fit (knot_fit.h), or from the
+  // motion's bandwidth (knot_spacing.h) with knot_spacing_by_fit false.
   double knot_spacing_s = 0.0;
+  bool knot_spacing_by_fit = true;
   // Knot spacing of the (linear) bias splines, s.
   double bias_knot_spacing_s = 1.0;
   bool analytic = true;  // false: the same residuals through ceres::Jet (--autodiff)
@@ -98,6 +101,20 @@ struct SplineCalibratorOptions {
   // J^T J assembled on `threads` threads, the calibration blocks as the Schur border); false:
   // ceres::Solve (the reference of the tests).
   bool lm_solver = true;
+  // The noise weighting the final solve and the covariance: estimated from the data by variance
+  // component estimation, the stated noise the start (docs/noise_estimation.md); false: the
+  // stated noise throughout (`--noise stated`, the behaviour before the estimation).
+  bool estimate_noise = true;
+  // At most this many rounds of estimate -> reweight -> re-solve; they stop once every sigma moves
+  // by < 0.5 %.
+  int noise_rounds = 4;
+  // Per-frame scales of a camera's corner sigmas, shrunk toward the camera's own with this many
+  // pseudo-residuals (ShrunkFrameVariance); 0: one scale per camera.
+  double frame_weight_prior = 0.0;
+  // Per-window (~2 s) scales of an inertial sensor's white noise, shrunk toward the sensor's with
+  // this many pseudo-residuals; 0: one level per sensor.
+  double window_weight_prior = 200.0;
+  RedundancyOptions redundancy;
   bool compute_covariance = true;
   // Measured vs predicted of every sample, the trajectory, the correlation: the report's data
   // (report_data_builder.h), in SplineCalibrationResult::report_data.
@@ -126,6 +143,15 @@ struct SplineCalibrationResult {
   double covariance_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<std::string> warnings;
+  // The noise estimation's rounds (0 with --noise stated) and every group's final statistics.
+  int noise_rounds = 0;
+  std::vector<VarianceComponent> noise_components;
+  // Per inertial sensor, the whitened RMS of its gyro and accelerometer rows per noise window
+  // (~2 s, whole bias-spline segments from the start of its samples; accel 0 for a gyro).
+  std::map<std::string, std::vector<std::pair<double, double>>> window_rms_whitened;
+  // Per camera, each frame's image stamp and the RMS of its corners' sigmas as the final solve
+  // weighed them (px; the per-frame weights, frame_weight_prior); empty with --noise stated.
+  std::map<std::string, std::vector<std::pair<std::int64_t, double>>> frame_sigma_px;
   // Tangent-space covariance of the estimated quantities, priors included (the left perturbation
   // for rotations, gravity as its 2-dof sphere tangent gravity_W.direction[i]), and the sigma of
   // the data alone (.inf where undetermined), per `covariance_names`; empty without covariance.
