@@ -77,6 +77,9 @@ struct SensorConfig {
   std::set<EstimateItem> estimate;
   SigmaBlock prior_sigma;  // empty: no prior
   SigmaBlock sigma;        // results only; ignored as input
+  // Results only, ignored as input: the covariance from the stated noise alone, written when
+  // `sigma` adds a model error that cross-validation found (docs/cross_validation.md).
+  SigmaBlock sigma_formal;
   std::optional<std::string> rostopic;
 
   bool Estimates(EstimateItem e) const { return estimate.count(e) > 0; }
