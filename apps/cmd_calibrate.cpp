@@ -205,12 +205,10 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
 // calibrated, their results kept in OUT/crossval/ for the report, the model error of the groups
 // whose subsets disagree added to the result's sigma (sigma_formal keeps the formal one).
 void CrossValidateResult(const SubsetSplit& split, const SplineCalibratorOptions& options,
-                         const CrossValidationOptions& xv_options, const std::string& out_dir,
-                         const CalibrationLog& log, RigConfig* result) {
+                         const std::string& out_dir, const CalibrationLog& log, RigConfig* result) {
   log("");
   log("=== cross-validation ===");
-  const CalibrationCrossValidation xv =
-      CrossValidateSubsets(*result, split, options, xv_options, log);
+  const CalibrationCrossValidation xv = CrossValidateSubsets(*result, split, options, log);
   log(FormatCalibrationCrossValidation(xv));
   if (!xv.ran)
     return;
@@ -450,7 +448,7 @@ int RunCalibrate(int argc, char** argv) {
           cli, log_file, [&] { result = CalibrateSpline(rig, std::move(data), options, log); }))
     return *failed;
   if (xv_options.enabled)
-    CrossValidateResult(split, options, xv_options, out_dir, log, &result.result);
+    CrossValidateResult(split, options, out_dir, log, &result.result);
   else
     log("cross-validation off (--no-cross-validate): sigma is the formal one");
 

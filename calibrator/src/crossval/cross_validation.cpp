@@ -89,7 +89,6 @@ SubsetSplit SplitIntoSubsets(const RigConfig& rig, const std::map<std::string, S
 
 CalibrationCrossValidation CrossValidateSubsets(const RigConfig& full, const SubsetSplit& split,
                                                 const SplineCalibratorOptions& options,
-                                                const CrossValidationOptions& xv_options,
                                                 const CalibrationLog& log) {
   const auto t_start = std::chrono::steady_clock::now();
   CalibrationCrossValidation xv;
@@ -99,9 +98,12 @@ CalibrationCrossValidation CrossValidateSubsets(const RigConfig& full, const Sub
     xv.why_not = split.why_not;
     return xv;
   }
+  // The full calibration's values are the guess: a few steps from the subset's optimum, which
+  // the solves' own stopping rule ends at (a cap on the iterations would leave a subset short
+  // of it, and its distance to F would read as model error). The biases start at zero (the
+  // rig holds none), as in F's solve.
   SplineCalibratorOptions sub = options;
-  sub.coarse_init.policy = GuessPolicy::kOff;  // the full calibration's values are the guess
-  sub.max_iterations = std::min(options.max_iterations, xv_options.max_iterations);
+  sub.coarse_init.policy = GuessPolicy::kOff;
   sub.report_data = false;
   sub.compute_covariance = true;
   // No priors in the subsets: F's prior is centred on the user's guess, a subset's would be

@@ -35,7 +35,7 @@ Outcome CalibrateAndCrossValidate(const SimulatedRecording& rec) {
   EXPECT_EQ(split.why_not, "");
   Outcome o;
   o.formal = CalibrateSpline(rec.guess, rec.data, options, Quiet()).result;
-  o.xv = CrossValidateSubsets(o.formal, split, options, xv_options, Quiet());
+  o.xv = CrossValidateSubsets(o.formal, split, options, Quiet());
   EXPECT_TRUE(o.xv.ran) << o.xv.why_not;
   o.reported = o.formal;
   ApplyModelError(o.xv.versus_full, &o.reported);

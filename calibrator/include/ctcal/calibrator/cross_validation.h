@@ -22,9 +22,6 @@ struct CrossValidationOptions {
   int subsets = 2;             // K >= 2
   double block_seconds = 4.0;  // length of one interleaved block of camera frames
   int min_blocks_per_subset = 2;
-  // Iterations of each subset's solves: it starts at the full calibration's values, a few steps
-  // from its own optimum.
-  int max_iterations = 10;
 };
 
 // Subsets 1 .. K-1's data: every camera's corners of the frames in the subset's blocks; the
@@ -55,7 +52,6 @@ struct CalibrationCrossValidation {
 // cross-validation not run, with why.
 CalibrationCrossValidation CrossValidateSubsets(const RigConfig& full, const SubsetSplit& split,
                                                 const SplineCalibratorOptions& options,
-                                                const CrossValidationOptions& xv_options,
                                                 const CalibrationLog& log);
 
 // The model error of each group whose test failed, added to `full`'s sigma: for parameter i of a
