@@ -69,7 +69,8 @@ Section Builder::CrossValidationSection() {
                "subset 1 against subset 2 (the rest of the full calibration),"
              : "sqrt(r) = sqrt(mean over subsets of (x_k - x_full)^2 / (sigma_k^2 - "
                "sigma_full^2))")
-    << " should be ~1; a group of parameters whose chi-square test fails (1 % false alarm) "
+    << " should be ~1; a group of parameters whose chi-square test fails (1 % false alarm over all "
+       "groups) "
        "has a model error its stated noise does not contain, added to the reported sigma "
        "(sigma_formal keeps the formal one).</p>\n";
   const std::string verdict =
@@ -84,7 +85,7 @@ Section Builder::CrossValidationSection() {
   h << "</p>\n";
 
   std::vector<std::vector<std::string>> groups = {
-      {"group", "dof", "statistic", "limit (99 %)", "test", "model error ratio", "sigma / formal"}};
+      {"group", "dof", "statistic", "limit", "test", "model error ratio", "sigma / formal"}};
   for (const CrossValGroup& g : cv.groups) {
     if (g.count == 0)
       continue;

@@ -94,11 +94,18 @@ void GroupTests(CrossValidation* cv) {
     ++g.count;
     g.statistic += cv->row_dof * *row.ratio;
   }
+  // Bonferroni: each of the n tested groups at kCrossValFalseAlarm / n, so that a rig without
+  // model error gets a false alarm in kCrossValFalseAlarm of its calibrations, not in n times
+  // that (a false alarm in a 1-dof group inflates its sigma several times).
+  int tested = 0;
+  for (const CrossValGroup& g : cv->groups)
+    tested += g.count > 0;
   for (CrossValGroup& g : cv->groups) {
     if (g.count == 0)
       continue;
     g.dof = cv->row_dof * g.count;
-    g.threshold = boost::math::quantile(boost::math::chi_squared(g.dof), 1.0 - kCrossValFalseAlarm);
+    g.threshold =
+        boost::math::quantile(boost::math::chi_squared(g.dof), 1.0 - kCrossValFalseAlarm / tested);
     g.passed = g.statistic <= g.threshold;
     g.mean_ratio = g.statistic / g.dof;
     g.model_ratio = g.passed ? 0.0 : std::max(0.0, g.mean_ratio - 1.0);
@@ -224,7 +231,7 @@ std::string FormatCrossValidation(const CrossValidation& cv) {
                   r.difference, r.values[0], r.sigmas[0], second, z.c_str());
     out << line;
   }
-  out << "groups (chi-square test of the disagreement at 1 % false alarm):\n";
+  out << "groups (chi-square test of the disagreement, 1 % false alarm over all groups):\n";
   for (const CrossValGroup& g : cv.groups) {
     if (g.count == 0) {
       out << "  " << g.name << ": no parameter with a sigma in every result\n";

@@ -12,7 +12,8 @@
 //
 // Groups (each camera's intrinsics with its distortion and line delay, each inertial sensor's
 // intrinsics, each sensor's R_B_S, t_B_S, time_offset): (K-1) sum_i r_i against the chi-square
-// quantile of (K-1) n dof at 1 % false alarm. A group that fails gets the model-error ratio
+// quantile of (K-1) n dof at 1 % false alarm over all groups (1 % / the number of tested groups
+// each: Bonferroni). A group that fails gets the model-error ratio
 // lambda = mean_i r_i - 1: the subsets disagree as if each one's variance were (1 + lambda) times
 // its formal one (calibrator/cross_validation.h turns that into the full calibration's sigma).
 //
@@ -57,7 +58,7 @@ struct CrossValGroup {
   int count = 0;           // rows with a ratio
   double statistic = 0.0;  // (K-1) sum r_i
   int dof = 0;             // (K-1) count
-  double threshold = 0.0;  // chi-square(dof) quantile at 1 - kCrossValFalseAlarm
+  double threshold = 0.0;  // chi-square(dof) quantile at 1 - kCrossValFalseAlarm / tested groups
   bool passed = true;
   double mean_ratio = 0.0;   // mean r_i
   double model_ratio = 0.0;  // lambda: 0 when passed, else max(0, mean r_i - 1)
