@@ -21,8 +21,10 @@ bool Usable(double s) {
   return std::isfinite(s) && s > 0.0;
 }
 
-// Nested: a subset sigma^2 below this many times F's leaves the difference to F's convergence.
-constexpr double kNestedMinVarianceRatio = 1.05;
+// Nested: below this ratio of a subset's sigma^2 to F's, x_k - x_F would be mostly the two solves'
+// distance to their optima (each stops within ~0.1 of its sigma: SplineCalibratorOptions::
+// stop_cost_change) over a small s_k^2 - s_F^2.
+constexpr double kNestedMinVarianceRatio = 1.2;
 
 // Log(R_k * R_1^T) of a rotation parameter: the left perturbation from the first result.
 Eigen::Vector3d RotationFromFirst(const RigConfig& first, const RigConfig& other,

@@ -23,7 +23,7 @@
 // samples included, and r_ik = (x_k - x_F)^2 / (s_k^2 - s_F^2) has mean 1 when the sigmas are
 // right; for K = 2, x_1 - x_F is half the difference between subset 1 and its complement, so
 // z = (x_1 - x_F) / sqrt(s_1^2 - s_F^2) is the complement pair's z with one subset solved.
-// A parameter whose subset sigma is hardly larger than F's (s_k^2 < 1.05 s_F^2: the frames left
+// A parameter whose subset sigma is hardly larger than F's (s_k^2 < 1.2 s_F^2: the frames left
 // out hardly inform it) has no ratio.
 #pragma once
 
