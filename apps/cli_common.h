@@ -43,19 +43,20 @@ class CommandLine {
   }
 
   boost::program_options::options_description& options() { return options_; }
+  boost::program_options::positional_options_description& positional() { return positional_; }
   const boost::program_options::variables_map& vm() const { return vm_; }
   const std::string& command() const { return command_; }
 
   // Parses argv (argv[0] is the subcommand name). Returns an exit code when the command must stop
   // now: 0 after printing --help, 2 after printing one line for bad usage. std::nullopt: go on.
-  // Positional arguments are rejected: every argument of SPEC section 8 is named.
+  // Positional arguments are rejected unless the command declared them in positional() (SPEC
+  // section 8 names every argument but crossval's two result files).
   std::optional<int> Parse(int argc, char** argv) {
     namespace po = boost::program_options;
     try {
-      const po::positional_options_description no_positionals;
       po::store(po::command_line_parser(argc, argv)  // skips argv[0], the name
                     .options(options_)
-                    .positional(no_positionals)
+                    .positional(positional_)
                     .style(po::command_line_style::default_style &
                            ~po::command_line_style::allow_guessing)
                     .run(),
@@ -103,6 +104,7 @@ class CommandLine {
   std::string synopsis_;
   std::string summary_;
   boost::program_options::options_description options_;
+  boost::program_options::positional_options_description positional_;
   boost::program_options::variables_map vm_;
 };
 

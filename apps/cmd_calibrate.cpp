@@ -6,6 +6,7 @@
 // `both` writes OUT/spline/, OUT/discrete/ and OUT/crosscheck.yaml. The exit code is the
 // report's verdict (SPEC section 8): 3 when one of its checks failed (calibrate_report.h).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -19,6 +20,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "ctcal/calibrator/camera_only/camera_only_calibrator.h"
+#include "ctcal/calibrator/cross_validation.h"
 #include "ctcal/calibrator/discrete/crosscheck.h"
 #include "ctcal/calibrator/discrete_calibrator.h"
 #include "ctcal/calibrator/init/bag_detection.h"
@@ -199,6 +201,31 @@ int RunDiscreteOrBoth(CommandLine& cli, const std::string& method, const RigConf
   return ExitCodeOfChecks(verdicts, log);
 }
 
+// Cross-validation of a finished spline calibration (docs/cross_validation.md): the subsets
+// calibrated, their results kept in OUT/crossval/ for the report, the model error of the groups
+// whose subsets disagree added to the result's sigma (sigma_formal keeps the formal one).
+void CrossValidateResult(const SubsetSplit& split, const SplineCalibratorOptions& options,
+                         const std::string& out_dir, const CalibrationLog& log, RigConfig* result) {
+  log("");
+  log("=== cross-validation ===");
+  const CalibrationCrossValidation xv = CrossValidateSubsets(*result, split, options, log);
+  log(FormatCalibrationCrossValidation(xv));
+  if (!xv.ran)
+    return;
+  const std::string dir = out_dir + "/crossval";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  for (std::size_t k = 0; k < xv.subsets.size(); ++k)
+    SaveRig(xv.subsets[k], dir + "/subset_" + std::to_string(k + 1) + ".yaml");
+  const int inflated = ApplyModelError(xv.versus_full, result);
+  log(inflated == 0
+          ? "cross-validation: the subsets agree within their sigmas; sigma is the "
+            "formal one"
+          : "cross-validation: model error added to the sigma of " + std::to_string(inflated) +
+                " parameters (sigma_formal: in result.yaml keeps the formal one)");
+  log("wrote " + dir + "/subset_*.yaml");
+}
+
 }  // namespace
 
 int RunCalibrate(int argc, char** argv) {
@@ -214,6 +241,7 @@ int RunCalibrate(int argc, char** argv) {
       aux_velocity, split_frame_rows, noise_policy;
   SplineCalibratorOptions options;
   DiscreteCalibratorOptions discrete_options;
+  CrossValidationOptions xv_options;
   cli.options().add_options()(
       "rig", po::value(&rig_path),
       "rig file with initial guesses (SPEC section 7); without it, DATA's sensor.yaml files "
@@ -256,10 +284,22 @@ int RunCalibrate(int argc, char** argv) {
       "Levenberg-Marquardt iterations per solve")(
       "noise", po::value(&noise_policy)->default_value("estimate"),
       "spline: estimate (every sensor's noise from the data, the stated noise the start; "
-      "docs/noise_estimation.md) or stated (the rig file's noise weighs everything)");
+      "docs/noise_estimation.md) or stated (the rig file's noise weighs everything)")(
+      "no-cross-validate", po::bool_switch(),
+      "skip the cross-validation between subsets of the recording (docs/cross_validation.md): "
+      "sigma is then the formal one alone")(
+      "subsets", po::value(&xv_options.subsets)->default_value(2),
+      "cross-validation: number of interleaved subsets K >= 2")(
+      "subset-block", po::value(&xv_options.block_seconds)->default_value(4.0),
+      "cross-validation: length in s of the blocks dealt to the subsets in turn");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
+  xv_options.enabled = !cli.vm()["no-cross-validate"].as<bool>();
+  if (xv_options.subsets < 2)
+    return cli.UsageError("--subsets must be >= 2, got " + std::to_string(xv_options.subsets));
+  if (!(xv_options.block_seconds >= 0.5 && std::isfinite(xv_options.block_seconds)))
+    return cli.UsageError("--subset-block must be >= 0.5 s");
   options.compress_frames = !cli.vm()["per-corner-blocks"].as<bool>();
   if (method != "spline" && method != "discrete" && method != "both")
     return cli.UsageError("--method must be spline, discrete or both, got " + method);
@@ -302,6 +342,8 @@ int RunCalibrate(int argc, char** argv) {
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
+  // A previous run's subsets are not this run's (the report would show them).
+  std::filesystem::remove_all(out_dir + "/crossval", ec);
   std::ofstream log_file(out_dir + "/log.txt");
   if (!log_file)
     return cli.RunFailed(out_dir + "/log.txt: cannot write the log");
@@ -383,6 +425,8 @@ int RunCalibrate(int argc, char** argv) {
     run_info.emplace_back(key, value);
 
   if (rig.IsCameraOnly()) {
+    log("cross-validation not run: it is part of the visual-inertial calibration (--method "
+        "spline)");
     // SPEC section 7: a rig without IMUs is a camera calibration (per-frame board poses); the
     // spline and the discrete trajectory models do not apply, so say that --method is unused.
     if (method != "spline") {
@@ -394,16 +438,25 @@ int RunCalibrate(int argc, char** argv) {
                          !options.compress_frames, &clock, detection);
   }
   if (method != "spline") {
+    log("cross-validation not run: it is part of --method spline");
     discrete_options.threads = options.threads;
     discrete_options.max_iterations = options.max_iterations;
     return RunDiscreteOrBoth(cli, method, rig, data, options, discrete_options, out_dir, log,
                              log_file, run_info);
   }
 
+  // The subsets are cut before the full calibration takes the data over.
+  SubsetSplit split;
+  if (xv_options.enabled)
+    split = SplitIntoSubsets(rig, data, xv_options, options.min_views);
   SplineCalibrationResult result;
   if (const auto failed = Guarded(
           cli, log_file, [&] { result = CalibrateSpline(rig, std::move(data), options, log); }))
     return *failed;
+  if (xv_options.enabled)
+    CrossValidateResult(split, options, out_dir, log, &result.result);
+  else
+    log("cross-validation off (--no-cross-validate): sigma is the formal one");
 
   const report::StageTime calibration = clock.Lap("calibration");
   try {

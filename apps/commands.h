@@ -9,6 +9,7 @@ int RunSimulate(int argc, char** argv);
 int RunDetect(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunCompare(int argc, char** argv);
+int RunCrossval(int argc, char** argv);
 int RunReport(int argc, char** argv);
 int RunMonteCarlo(int argc, char** argv);
 int RunTarget(int argc, char** argv);

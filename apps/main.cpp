@@ -19,6 +19,8 @@ constexpr Command kCommands[] = {
     {"detect", ctcal::app::RunDetect, "detect board corners in a dataset's images"},
     {"calibrate", ctcal::app::RunCalibrate, "calibrate a rig from a dataset"},
     {"compare", ctcal::app::RunCompare, "compare a result with the truth, parameter by parameter"},
+    {"crossval", ctcal::app::RunCrossval,
+     "compare two results of one rig from different data against their sigmas"},
     {"report", ctcal::app::RunReport, "re-render the report of a finished calibration"},
     {"montecarlo", ctcal::app::RunMonteCarlo, "simulate and calibrate many seeds, test NEES"},
     {"target", ctcal::app::RunTarget, "write a printable board PDF"},

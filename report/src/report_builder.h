@@ -1,6 +1,7 @@
 // The report's document builder: one Section per page group in issue 10's order (the
 // ten-second summary, parameters, Kalibr matrices, poses, per inertial sensor, per camera,
-// normalised residual histograms, correlation, observability, cross-check, configuration).
+// normalised residual histograms, correlation, observability, cross-check, cross-validation,
+// configuration).
 // report_summary_pages.cpp, report_sensor_pages.cpp and report_analysis_pages.cpp build them;
 // report.cpp draws them into the HTML and the PDF. Private to the report library.
 #pragma once
@@ -66,6 +67,7 @@ class Builder {
     out.push_back(CorrelationSection());
     out.push_back(ObservabilitySection());
     out.push_back(CrosscheckSection(crosscheck));
+    out.push_back(CrossValidationSection());
     out.push_back(ConfigSection());
     return out;
   }
@@ -132,6 +134,7 @@ class Builder {
   Section CorrelationSection();
   Section ObservabilitySection();
   Section CrosscheckSection(const std::string& path);
+  Section CrossValidationSection();  // report_crossval_page.cpp
   Section ConfigSection();
 
   const RigConfig& rig_;

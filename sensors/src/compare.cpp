@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ctcal/sensors/json_format.h"
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/spline/so3.h"
@@ -14,30 +15,6 @@ namespace ctcal {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-
-std::string JsonNumber(double x) {
-  return std::isfinite(x) ? FormatDouble(x) : "null";
-}
-std::string JsonNumber(const std::optional<double>& x) {
-  return x ? JsonNumber(*x) : std::string("null");
-}
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 std::string Cell(double x) {
   if (std::isinf(x))

@@ -156,7 +156,8 @@ bool operator==(const SensorConfig& a, const SensorConfig& b) {
          a.height == b.height && Same(a.line_delay, b.line_delay) &&
          Same(a.pixel_sigma, b.pixel_sigma) && Same(a.T_B_S, b.T_B_S) &&
          Same(a.time_offset, b.time_offset) && a.estimate == b.estimate &&
-         a.prior_sigma == b.prior_sigma && a.sigma == b.sigma && a.rostopic == b.rostopic &&
+         a.prior_sigma == b.prior_sigma && a.sigma == b.sigma && a.sigma_formal == b.sigma_formal &&
+         a.rostopic == b.rostopic &&
          a.noise_estimated.has_value() == b.noise_estimated.has_value() &&
          (!a.noise_estimated || SameNoise(*a.noise_estimated, *b.noise_estimated)) &&
          Same(a.pixel_sigma_estimated, b.pixel_sigma_estimated);

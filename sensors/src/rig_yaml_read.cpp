@@ -104,6 +104,8 @@ class RigReader {
         s.prior_sigma = ReadSigma(kv.second["prior_sigma"], rig, s, "prior_sigma");
       if (kv.second["sigma"])
         s.sigma = ReadSigma(kv.second["sigma"], rig, s, "sigma");
+      if (kv.second["sigma_formal"])
+        s.sigma_formal = ReadSigma(kv.second["sigma_formal"], rig, s, "sigma_formal");
     }
 
     if (root["gravity_W"])
@@ -450,11 +452,12 @@ class RigReader {
     for (double x : v) {
       // sigma: >= 0, .inf when undetermined, .nan when the covariance failed; prior_sigma: > 0,
       // .inf for "no prior on this component".
-      const bool ok = block == "sigma" ? (std::isnan(x) || x >= 0.0) : (x > 0.0);
+      const bool is_sigma = block == "sigma" || block == "sigma_formal";
+      const bool ok = is_sigma ? (std::isnan(x) || x >= 0.0) : (x > 0.0);
       if (!ok) {
         in_.Fail(node, where,
-                 block == "sigma" ? "a sigma must be >= 0 (or .inf / .nan)"
-                                  : "a prior_sigma must be > 0 (or .inf for no prior)");
+                 is_sigma ? "a sigma must be >= 0 (or .inf / .nan)"
+                          : "a prior_sigma must be > 0 (or .inf for no prior)");
       }
     }
     return v;

@@ -141,6 +141,10 @@ void EmitSensor(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s)
     out << YAML::Key << "sigma" << YAML::Value << YAML::Flow;
     EmitSigma(out, rig, s, s.sigma);
   }
+  if (!s.sigma_formal.empty()) {
+    out << YAML::Key << "sigma_formal" << YAML::Value << YAML::Flow;
+    EmitSigma(out, rig, s, s.sigma_formal);
+  }
   if (s.rostopic) {
     out << YAML::Key << "rostopic" << YAML::Value << YAML::DoubleQuoted << *s.rostopic;
   }

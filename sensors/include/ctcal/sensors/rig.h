@@ -83,6 +83,9 @@ struct SensorConfig {
   // sigmas).
   std::optional<InertialNoise> noise_estimated;
   std::optional<double> pixel_sigma_estimated;
+  // Results only, ignored as input: the covariance from the stated noise alone, written when
+  // `sigma` adds a model error that cross-validation found (docs/cross_validation.md).
+  SigmaBlock sigma_formal;
   std::optional<std::string> rostopic;
 
   bool Estimates(EstimateItem e) const { return estimate.count(e) > 0; }
