@@ -282,12 +282,13 @@ int RunCalibrate(int argc, char** argv) {
       "without prior_sigma, and those the data contradict), always, off")(
       "max-iterations", po::value(&options.max_iterations)->default_value(50),
       "Levenberg-Marquardt iterations per solve")(
-      "noise", po::value(&noise_policy)->default_value("estimate"),
+      "noise", po::value(&noise_policy)->default_value("stated"),
       "spline: estimate (every sensor's noise from the data, the stated noise the start; "
       "docs/noise_estimation.md) or stated (the rig file's noise weighs everything)")(
-      "no-cross-validate", po::bool_switch(),
-      "skip the cross-validation between subsets of the recording (docs/cross_validation.md): "
-      "sigma is then the formal one alone")(
+      "cross-validate", po::bool_switch(),
+      "cross-validate between subsets of the recording (docs/cross_validation.md): sigma then "
+      "adds the model error the subsets' disagreement shows")(
+      "no-cross-validate", po::bool_switch(), "no cross-validation (the default)")(
       "subsets", po::value(&xv_options.subsets)->default_value(2),
       "cross-validation: number of interleaved subsets K >= 2")(
       "subset-block", po::value(&xv_options.block_seconds)->default_value(4.0),
@@ -295,7 +296,8 @@ int RunCalibrate(int argc, char** argv) {
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
-  xv_options.enabled = !cli.vm()["no-cross-validate"].as<bool>();
+  xv_options.enabled =
+      cli.vm()["cross-validate"].as<bool>() && !cli.vm()["no-cross-validate"].as<bool>();
   if (xv_options.subsets < 2)
     return cli.UsageError("--subsets must be >= 2, got " + std::to_string(xv_options.subsets));
   if (!(xv_options.block_seconds >= 0.5 && std::isfinite(xv_options.block_seconds)))
@@ -326,6 +328,8 @@ int RunCalibrate(int argc, char** argv) {
   if (noise_policy != "estimate" && noise_policy != "stated")
     return cli.UsageError("--noise must be estimate or stated, got " + noise_policy);
   options.estimate_noise = noise_policy == "estimate";
+  // The knot rule by fit belongs to the noise estimation (docs/noise_estimation.md).
+  options.knot_spacing_by_fit = options.estimate_noise;
   try {
     CheckOptions(options);  // before any data are read
   } catch (const CalibrationInputError& e) {
@@ -456,7 +460,7 @@ int RunCalibrate(int argc, char** argv) {
   if (xv_options.enabled)
     CrossValidateResult(split, options, out_dir, log, &result.result);
   else
-    log("cross-validation off (--no-cross-validate): sigma is the formal one");
+    log("cross-validation off (--cross-validate turns it on): sigma is the formal one");
 
   const report::StageTime calibration = clock.Lap("calibration");
   try {

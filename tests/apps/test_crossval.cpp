@@ -78,7 +78,7 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
   const std::string data = test::SimulateOnce("ctcal_crossval_sim", test::FullTable4Args(3, 16));
   const std::string out = Dir("calibrate");
   const auto r = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " + out +
-                              " --threads 2 --subset-block 2",
+                              " --threads 2 --cross-validate --subset-block 2",
                           out + "/run");
   ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
   const std::string log = Slurp(out + "/log.txt");
@@ -102,12 +102,12 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
                                 out + " --threads 2 --no-cross-validate",
                             out + "/run_off");
   ASSERT_TRUE(off.code == 0 || off.code == 3) << off.err;
-  EXPECT_NE(Slurp(out + "/log.txt").find("cross-validation off (--no-cross-validate)"),
+  EXPECT_NE(Slurp(out + "/log.txt").find("cross-validation off (--cross-validate turns it on)"),
             std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(out + "/crossval"));
-  const auto k1 = RunCtcal(
-      "calibrate --rig " + data + "/rig.yaml --data " + data + " --out " + out + " --subsets 1",
-      out + "/run_k1");
+  const auto k1 = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +
+                               out + " --cross-validate --subsets 1",
+                           out + "/run_k1");
   EXPECT_EQ(k1.code, 2);
   EXPECT_EQ(Lines(k1.err), 1) << k1.err;
 }

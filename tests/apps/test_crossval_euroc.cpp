@@ -87,7 +87,8 @@ TEST(CrossvalEuroc, TwoPartsOfTheFirstHalfAgreeWithinTheReportedSigma) {
                              "cam1/corners.csv"})
       CutCsv(data / file, dir / "data" / file, t0, t1);
     const auto r = RunCtcal("calibrate --rig " + (data / "rig.yaml").string() + " --data " +
-                                (dir / "data").string() + " --out " + (dir / "out").string(),
+                                (dir / "data").string() + " --out " + (dir / "out").string() +
+                                " --noise estimate --cross-validate",
                             (dir / "run").string());
     ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
     std::vector<std::string> warnings;

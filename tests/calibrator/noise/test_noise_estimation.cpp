@@ -38,6 +38,8 @@ SplineCalibratorOptions Options() {
   o.threads = 2;
   o.report_data = false;
   o.compute_covariance = false;
+  o.estimate_noise = true;  // `--noise estimate` (off by default until validated)
+  o.knot_spacing_by_fit = true;
   return o;
 }
 

@@ -32,6 +32,7 @@ SplineCalibrationResult Calibrate(bool estimate) {
   o.report_data = false;
   o.compute_covariance = false;
   o.estimate_noise = estimate;
+  o.knot_spacing_by_fit = estimate;
   return CalibrateSpline(rig, std::move(data), o, [](const std::string&) {});
 }
 

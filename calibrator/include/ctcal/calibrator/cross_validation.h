@@ -18,7 +18,7 @@
 namespace ctcal {
 
 struct CrossValidationOptions {
-  bool enabled = true;
+  bool enabled = false;        // `--cross-validate`; off by default until validated (issue 20)
   int subsets = 2;             // K >= 2
   double block_seconds = 4.0;  // length of one interleaved block of camera frames
   int min_blocks_per_subset = 2;

@@ -48,7 +48,8 @@ struct SplineCalibratorOptions {
   // Knot spacing of the trajectory (s); 0 = from the data: by fit (knot_fit.h), or from the
   // motion's bandwidth (knot_spacing.h) with knot_spacing_by_fit false.
   double knot_spacing_s = 0.0;
-  bool knot_spacing_by_fit = true;
+  // Off by default until its real-recording numbers are measured (issue 19): the bandwidth rule.
+  bool knot_spacing_by_fit = false;
   // Knot spacing of the (linear) bias splines, s.
   double bias_knot_spacing_s = 1.0;
   bool analytic = true;  // false: the same residuals through ceres::Jet (--autodiff)
@@ -104,7 +105,8 @@ struct SplineCalibratorOptions {
   // The noise weighting the final solve and the covariance: estimated from the data by variance
   // component estimation, the stated noise the start (docs/noise_estimation.md); false: the
   // stated noise throughout (`--noise stated`, the behaviour before the estimation).
-  bool estimate_noise = true;
+  // Off by default until validated end to end on real recordings (issue 19): `--noise estimate`.
+  bool estimate_noise = false;
   // At most this many rounds of estimate -> reweight -> re-solve; they stop once every sigma moves
   // by < 0.5 %.
   int noise_rounds = 4;
