@@ -2,6 +2,7 @@
 // rig reader and sensors/compare.h; prints the table on stdout.
 #include <fstream>
 #include <iostream>
+#include <string>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -11,10 +12,14 @@
 namespace ctcal::app {
 
 int RunCompare(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--projection")
+      return RunCompareProjection(argc, argv);
   namespace po = boost::program_options;
   CommandLine cli("compare", "--truth TRUTH.yaml --result RESULT.yaml [--json OUT.json]",
                   "Compare a result file with the truth, one row per estimated scalar: truth, "
-                  "estimate, error, sigma, error/sigma; rotations as Log(R_est * R_true^T).");
+                  "estimate, error, sigma, error/sigma; rotations as Log(R_est * R_true^T). "
+                  "Two lens fits of any models: ctcal compare --projection --help.");
   std::string truth_path, result_path, json_path;
   cli.options().add_options()("truth", po::value(&truth_path)->required(),
                               "truth file (SPEC section 7), e.g. DATA/truth.yaml")(

@@ -10,6 +10,9 @@ int RunDetect(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunCompare(int argc, char** argv);
 int RunCrossval(int argc, char** argv);
+// `ctcal compare --projection ...` (cmd_compare_projection.cpp): two lens fits' projection
+// difference; RunCompare hands over when argv holds --projection.
+int RunCompareProjection(int argc, char** argv);
 int RunReport(int argc, char** argv);
 int RunMonteCarlo(int argc, char** argv);
 int RunTarget(int argc, char** argv);

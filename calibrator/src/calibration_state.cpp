@@ -21,9 +21,10 @@ double UnitOf(const std::string& key, const std::string& camera_param_name) {
     return 1e-3;
   if (key == "line_delay")
     return 1e-6;
-  if (key == "intrinsics" && (camera_param_name == "fu" || camera_param_name == "fv" ||
-                              camera_param_name == "pu" || camera_param_name == "pv"))
-    return 1.0;
+  // Pixels: Kalibr's focal length and centre, and mrcal's (camera_model mrcal).
+  for (const char* px : {"fu", "fv", "pu", "pv", "fx", "fy", "cx", "cy"})
+    if (key == "intrinsics" && camera_param_name == px)
+      return 1.0;
   return 1e-3;
 }
 

@@ -122,6 +122,10 @@ class Builder {
                        const std::string& part, const std::string& unit, double sigma);
   Section InertialSection(const SensorConfig& s);
   void DistortionFigure(Section* sec, const SensorConfig& s) const;
+  // Lens-fit diagnosis (lens_fit.h): the mean residual vector per image cell, its chi-square
+  // test, and the richer model to try when the pattern is significant.
+  void LensFitFigure(Section* sec, const SensorConfig& s,
+                     const std::vector<CornerResidual>& corners) const;
   Section CameraSection(const SensorConfig& s);
   void WhitenedFrameFigure(
       Section* sec, const std::string& camera,

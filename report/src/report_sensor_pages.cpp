@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "ctcal/report/distortion_field.h"
+#include "ctcal/report/lens_fit.h"
 
 #include "report_builder.h"
 
@@ -251,6 +252,52 @@ void Builder::WhitenedFrameFigure(
   sec->figures.push_back(f);
 }
 
+void Builder::LensFitFigure(Section* sec, const SensorConfig& s,
+                            const std::vector<CornerResidual>& corners) const {
+  LensFitDiagnosis d;
+  try {
+    d = DiagnoseLensFit(s, corners);
+  } catch (const std::exception& e) {
+    sec->html += "<p class=\"note\">lens fit not diagnosed: " + Escape(e.what()) + "</p>\n";
+    return;
+  }
+  if (d.cells.empty())
+    return;
+  const double W = s.width, H = s.height;
+  // Arrows scaled so that the largest cell mean spans a cell; the scale is in the title.
+  const double scale = d.max_mean_px > 0 ? (W / d.cells_x) / d.max_mean_px : 1.0;
+  std::vector<double> x0, y0, dx, dy;
+  for (const LensFitCell& c : d.cells) {
+    x0.push_back(-0.5 + W * (c.col + 0.5) / d.cells_x);
+    y0.push_back(-0.5 + H * (c.row + 0.5) / d.cells_y);
+    dx.push_back(scale * c.mean.x());
+    dy.push_back(scale * c.mean.y());
+  }
+  auto f = NewFigure(
+      "fig-" + s.name + "-lens-fit",
+      s.name + ": lens fit, mean residual per cell (max " + FormatNumber(d.max_mean_px, 3) + " px)",
+      1, 1);
+  auto& p = f->Add<XYPlot>();
+  p.title = "mean (measured - predicted) per cell, arrows x" + FormatNumber(scale, 3);
+  ImageAxes(W, H, &p);
+  p.Arrows(x0, y0, dx, dy, d.significant ? kFail : PaletteColor(0));
+  sec->figures.push_back(f);
+  std::ostringstream h;
+  h << "<p class=\"note\">Lens fit: chi-square " << FormatNumber(d.chi2, 4) << " on " << d.dof
+    << " degrees of freedom (" << d.cells.size() << " cells of " << d.corners
+    << " corners, within-cell noise " << FormatNumber(d.noise_px, 3)
+    << " px), p = " << FormatNumber(d.p_value, 2) << "; mean |cell mean| "
+    << FormatNumber(d.border_mean_px, 3) << " px at the border, "
+    << FormatNumber(d.inner_mean_px, 3) << " px inside. ";
+  if (d.significant)
+    h << "<b>The residuals keep a systematic pattern: the model does not fit this lens.</b> Try "
+      << Escape(d.suggestion) << ".";
+  else
+    h << "No significant systematic pattern.";
+  h << "</p>\n";
+  sec->html += h.str();
+}
+
 Section Builder::CameraSection(const SensorConfig& s) {
   Section sec("sec-camera-" + s.name,
               "Camera " + s.name + " (" + s.camera_model + ", " + s.distortion_model + ")");
@@ -334,6 +381,7 @@ Section Builder::CameraSection(const SensorConfig& s) {
     hm.value_label = "px";
     sec.figures.push_back(f);
   }
+  LensFitFigure(&sec, s, c);
   DistortionFigure(&sec, s);
   std::ostringstream h;
   h << "<p>" << c.size() << " corners in " << per_frame.size() << " images, " << ou.size()

@@ -3,6 +3,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ctcal/sensors/mrcal_lens.h"
+
 namespace ctcal {
 
 namespace {
@@ -22,8 +24,13 @@ constexpr TypeName kTypeNames[] = {
     {CameraModelType::kDoubleSphere, "ds", "none"},
     {CameraModelType::kEucm, "eucm", "none"},
 };
+// camera_model "mrcal": its distortion_model is mrcal's lens model name (any).
+constexpr const char* kMrcalName = "mrcal";
 
 const TypeName& Lookup(CameraModelType type) {
+  static const TypeName mrcal{CameraModelType::kMrcal, kMrcalName, "(mrcal lens model)"};
+  if (type == CameraModelType::kMrcal)
+    return mrcal;
   for (const TypeName& t : kTypeNames)
     if (t.type == type)
       return t;
@@ -47,6 +54,10 @@ void CheckResolution(const Eigen::Vector2i& resolution) {
 
 CameraModelType ParseCameraModelType(const std::string& camera_model,
                                      const std::string& distortion_model) {
+  if (camera_model == kMrcalName) {
+    MrcalLens::FromName(distortion_model);  // throws for an unknown or unconfigured name
+    return CameraModelType::kMrcal;
+  }
   bool known_camera = false;
   for (const TypeName& t : kTypeNames) {
     if (camera_model == t.camera_model) {
@@ -57,7 +68,7 @@ CameraModelType ParseCameraModelType(const std::string& camera_model,
   }
   if (!known_camera)
     throw std::invalid_argument("unknown camera_model '" + camera_model +
-                                "' (expected pinhole, omni, ds or eucm)");
+                                "' (expected pinhole, omni, ds, eucm or mrcal)");
   std::string accepted;
   for (const TypeName& t : kTypeNames) {
     if (camera_model == t.camera_model)
@@ -81,6 +92,17 @@ CameraModel CameraModel::Create(const std::string& camera_model,
                                 const std::vector<double>& distortion_coeffs,
                                 const Eigen::Vector2i& resolution) {
   const CameraModelType type = ParseCameraModelType(camera_model, distortion_model);
+  if (type == CameraModelType::kMrcal) {
+    if (!distortion_coeffs.empty())
+      throw std::invalid_argument(
+          "camera model 'mrcal' takes all of mrcal's parameters as "
+          "intrinsics; distortion_coeffs must be empty, got " +
+          std::to_string(distortion_coeffs.size()));
+    return CameraModel(MrcalLens::FromName(distortion_model),
+                       Eigen::Map<const Eigen::VectorXd>(
+                           intrinsics.data(), static_cast<Eigen::Index>(intrinsics.size())),
+                       resolution);
+  }
   const auto [n_intrinsics, n_params] = VisitCameraModel(type, [](auto model) {
     using Model = decltype(model);
     return std::pair<int, int>(Model::kNumProjectionParams, Model::kNumParams);
@@ -108,7 +130,33 @@ CameraModel::CameraModel(CameraModelType type, const Eigen::VectorXd& params,
   SetParams(params);
 }
 
+CameraModel::CameraModel(std::shared_ptr<const MrcalLens> lens, const Eigen::VectorXd& params,
+                         const Eigen::Vector2i& resolution)
+    : type_(CameraModelType::kMrcal), mrcal_lens_(std::move(lens)), resolution_(resolution) {
+  if (!mrcal_lens_)
+    throw std::invalid_argument("camera model 'mrcal' needs a lens model");
+  CheckResolution(resolution);
+  SetParams(params);
+}
+
+std::string CameraModel::distortion_model() const {
+  return mrcal_lens_ ? mrcal_lens_->name() : DistortionModelName(type_);
+}
+
 void CameraModel::SetParams(const Eigen::VectorXd& params) {
+  if (mrcal_lens_) {
+    if (params.size() != mrcal_lens_->NumParams())
+      throw std::invalid_argument("mrcal lens model " + mrcal_lens_->name() + " needs " +
+                                  std::to_string(mrcal_lens_->NumParams()) + " intrinsics, got " +
+                                  std::to_string(params.size()));
+    std::string why;
+    if (!mrcal_lens_->CheckParams(params.data(), &why))
+      throw std::invalid_argument("mrcal lens model " + mrcal_lens_->name() + ": " + why);
+    params_ = params;
+    return;
+  }
+  if (type_ == CameraModelType::kMrcal)
+    throw std::invalid_argument("camera model 'mrcal' needs a lens model");
   const int n = VisitCameraModel(type_, [](auto model) { return decltype(model)::kNumParams; });
   if (params.size() != n)
     throw std::invalid_argument(Describe(type_) + " needs " + std::to_string(n) +
@@ -123,17 +171,25 @@ void CameraModel::SetParams(const Eigen::VectorXd& params) {
 }
 
 int CameraModel::NumIntrinsics() const {
+  if (mrcal_lens_)
+    return NumParams();
   return VisitCameraModel(type_, [](auto model) { return decltype(model)::kNumProjectionParams; });
 }
 
 void CameraModel::ParamBounds(Eigen::VectorXd* lower, Eigen::VectorXd* upper) const {
   lower->resize(NumParams());
   upper->resize(NumParams());
+  if (mrcal_lens_) {
+    FreeBounds(NumParams(), lower->data(), upper->data());
+    return;
+  }
   VisitCameraModel(type_,
                    [&](auto model) { decltype(model)::ParamBounds(lower->data(), upper->data()); });
 }
 
 std::vector<std::string> CameraModel::ParamNames() const {
+  if (mrcal_lens_)
+    return mrcal_lens_->ParamNames();
   return VisitCameraModel(type_, [](auto model) {
     const auto names = decltype(model)::ParamNames();
     return std::vector<std::string>(names.begin(), names.end());
@@ -151,6 +207,8 @@ std::vector<double> CameraModel::distortion_coeffs() const {
 bool CameraModel::Project(const Eigen::Vector3d& p_C, Eigen::Vector2d* uv,
                           Eigen::Matrix<double, 2, 3>* J_uv_p,
                           Eigen::Matrix<double, 2, Eigen::Dynamic>* J_uv_params) const {
+  if (mrcal_lens_)
+    return mrcal_lens_->Project(params_.data(), p_C, uv, J_uv_p, J_uv_params);
   return VisitCameraModel(type_, [&](auto model) {
     using Model = decltype(model);
     if (!J_uv_params)
@@ -163,6 +221,8 @@ bool CameraModel::Project(const Eigen::Vector3d& p_C, Eigen::Vector2d* uv,
 }
 
 bool CameraModel::Unproject(const Eigen::Vector2d& uv, Eigen::Vector3d* ray_C) const {
+  if (mrcal_lens_)
+    return mrcal_lens_->Unproject(params_.data(), uv, ray_C);
   return VisitCameraModel(
       type_, [&](auto model) { return decltype(model)::Unproject(params_.data(), uv, ray_C); });
 }

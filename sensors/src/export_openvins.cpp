@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "ctcal/sensors/ecosystem_exports.h"
+#include "ctcal/sensors/mrcal_model.h"
 #include "ctcal/sensors/number_format.h"
 #include "export_helpers.h"
 
@@ -168,6 +169,8 @@ std::vector<std::string> SaveEcosystemExports(const RigConfig& rig, const std::s
   }
   save(EmitOpenVinsImucamChain(rig, &why), "kalibr_imucam_chain.yaml");
   save(EmitOpenVinsImuChain(rig, &why, notes), "kalibr_imu_chain.yaml");
+  for (const std::string& path : SaveMrcalCameraModels(rig, dir, notes))
+    written.push_back(path);
   return written;
 }
 

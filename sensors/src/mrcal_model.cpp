@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ctcal/sensors/mrcal_lens.h"
 #include "ctcal/spline/so3.h"
 
 namespace ctcal {
@@ -294,7 +295,8 @@ CameraModelType FromMrcalLensModelName(const std::string& lensmodel) {
 }
 
 std::string EmitMrcalCameraModel(const CameraModel& camera, const MrcalRt& rt_cam_ref) {
-  const std::string lensmodel = MrcalLensModelName(camera.type());
+  const std::string lensmodel =
+      camera.mrcal_lens() ? camera.mrcal_lens()->name() : MrcalLensModelName(camera.type());
   std::ostringstream out;
   out << "# mrcal .cameramodel written by ctcal (" << camera.camera_model() << " + "
       << camera.distortion_model() << ")\n"
@@ -355,11 +357,18 @@ MrcalCameraModel ParseMrcalCameraModel(const std::string& text, const std::strin
   const PyValue& lens = *keys.at("lensmodel");
   if (lens.kind != PyValue::Kind::kString)
     parser.FailAt(lens.line, "'lensmodel' must be a string, found " + KindName(lens.kind));
-  CameraModelType type;
+  // The two models SPEC section 4 shares with mrcal become ctcal's own; every other one an mrcal
+  // camera (camera_model mrcal).
+  std::shared_ptr<const MrcalLens> mrcal_lens;
+  CameraModelType type = CameraModelType::kMrcal;
   try {
     type = FromMrcalLensModelName(lens.text);
-  } catch (const std::invalid_argument& e) {
-    parser.FailAt(lens.line, e.what());
+  } catch (const std::invalid_argument&) {
+    try {
+      mrcal_lens = MrcalLens::FromName(lens.text);
+    } catch (const std::invalid_argument& e) {
+      parser.FailAt(lens.line, e.what());
+    }
   }
 
   const std::vector<double> intrinsics = numbers("intrinsics", false);
@@ -373,9 +382,11 @@ MrcalCameraModel ParseMrcalCameraModel(const std::string& text, const std::strin
     parser.FailAt(keys.at("imagersize")->line, "'imagersize' must be [width, height], found " +
                                                    std::to_string(imagersize.size()) + " numbers");
   try {
-    CameraModel camera(
-        type, Eigen::Map<const Eigen::VectorXd>(intrinsics.data(), intrinsics.size()),
-        Eigen::Vector2i(static_cast<int>(imagersize[0]), static_cast<int>(imagersize[1])));
+    const Eigen::Map<const Eigen::VectorXd> params(intrinsics.data(),
+                                                   static_cast<Eigen::Index>(intrinsics.size()));
+    const Eigen::Vector2i size(static_cast<int>(imagersize[0]), static_cast<int>(imagersize[1]));
+    CameraModel camera =
+        mrcal_lens ? CameraModel(mrcal_lens, params, size) : CameraModel(type, params, size);
     return MrcalCameraModel{camera, MrcalRt(extrinsics.data())};
   } catch (const std::invalid_argument& e) {
     parser.FailAt(keys.at("intrinsics")->line, "'" + lens.text + "': " + e.what());

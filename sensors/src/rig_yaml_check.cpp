@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "ctcal/sensors/mrcal_lens.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "rig_yaml_rules.h"
@@ -122,7 +123,18 @@ void ValidateRigAt(const RigConfig& rig, const std::string& context, const LineO
     check_count("Dw", s.D_w, s.type == SensorType::kCamera ? 0 : DwCount(s));
     check_count("Da", s.D_a, DaCount(s));
     check_count("Tg", s.T_g, TgCount(s));
-    if (s.type == SensorType::kCamera) {
+    if (s.type == SensorType::kCamera && s.camera_model == "mrcal") {
+      // distortion_model holds mrcal's lens model name (rig_yaml_read.cpp, ReadMrcalLens).
+      try {
+        check_count("intrinsics", s.intrinsics,
+                    MrcalLens::FromName(s.distortion_model)->NumParams());
+      } catch (const std::invalid_argument& e) {
+        fail(where, e.what());
+      }
+      check_count("distortion_coeffs", s.distortion_coeffs, 0);
+      if (s.width <= 0 || s.height <= 0)
+        fail(where, "resolution must be positive");
+    } else if (s.type == SensorType::kCamera) {
       if (IntrinsicsCount(s.camera_model) < 0)
         fail(where, "unknown camera_model '" + s.camera_model + "'");
       if (DistortionCount(s.distortion_model) < 0)

@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "ctcal/sensors/mrcal_lens.h"
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
@@ -195,7 +196,7 @@ class RigReader {
         break;
       case SensorType::kCamera:
         allowed.insert({"camera_model", "intrinsics", "distortion_model", "distortion_coeffs",
-                        "resolution", "line_delay"});
+                        "resolution", "line_delay", "lensmodel"});
         kind = "a sensor of type camera";
         break;
     }
@@ -366,10 +367,18 @@ class RigReader {
         in_.Fail(node, where, std::string("missing required key '") + key + "'");
     }
     s.camera_model = in_.String(node["camera_model"], where + ".camera_model");
+    if (s.camera_model == "mrcal") {
+      ReadMrcalLens(node, s);
+      ReadImagerKeys(node, s);
+      return;
+    }
+    if (node["lensmodel"])
+      in_.Fail(node["lensmodel"], where, "lensmodel is a key of camera_model mrcal only");
     const int n_intrinsics = IntrinsicsCount(s.camera_model);
     if (n_intrinsics < 0) {
       in_.Fail(node["camera_model"], where,
-               "unknown camera_model '" + s.camera_model + "' (expected pinhole, omni, ds, eucm)");
+               "unknown camera_model '" + s.camera_model +
+                   "' (expected pinhole, omni, ds, eucm, mrcal)");
     }
     if (node["distortion_model"])
       s.distortion_model = in_.String(node["distortion_model"], where + ".distortion_model");
@@ -410,6 +419,43 @@ class RigReader {
                "missing required key 'distortion_coeffs' (" + std::to_string(n_dist) +
                    " numbers for " + s.distortion_model + ")");
     }
+    ReadImagerKeys(node, s);
+  }
+
+  // camera_model mrcal (docs/camera_models.md): mrcal's `lensmodel:` name, kept in
+  // SensorConfig::distortion_model (the name CameraModel::Create takes for it), and all of mrcal's
+  // parameters as `intrinsics`; distortion_model / distortion_coeffs are not used.
+  void ReadMrcalLens(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name);
+    if (!node["lensmodel"])
+      in_.Fail(node, where, "camera_model mrcal needs 'lensmodel' (e.g. LENSMODEL_OPENCV8)");
+    for (const char* key : {"distortion_model", "distortion_coeffs"}) {
+      if (node[key])
+        in_.Fail(node[key], where,
+                 std::string("camera_model mrcal takes no ") + key +
+                     " (mrcal's distortions are part of its intrinsics)");
+    }
+    s.distortion_model = in_.String(node["lensmodel"], where + ".lensmodel");
+    int n = 0;
+    try {
+      n = MrcalLens::FromName(s.distortion_model)->NumParams();
+    } catch (const std::invalid_argument& e) {
+      in_.Fail(node["lensmodel"], where, e.what());
+    }
+    if (!node["intrinsics"].IsSequence() || static_cast<int>(node["intrinsics"].size()) != n) {
+      in_.Fail(node["intrinsics"], where,
+               "intrinsics of " + s.distortion_model + " are " + std::to_string(n) +
+                   " numbers, got " +
+                   (node["intrinsics"].IsSequence() ? std::to_string(node["intrinsics"].size())
+                                                    : std::string("no list")));
+    }
+    s.intrinsics = in_.Vector(node["intrinsics"], where + ".intrinsics", n);
+    s.distortion_coeffs.clear();
+  }
+
+  // resolution, line_delay and the pixel noise, common to every camera model.
+  void ReadImagerKeys(const YAML::Node& node, SensorConfig& s) {
+    const std::string where = Where(s.name);
     const YAML::Node res = node["resolution"];
     if (!res.IsSequence() || res.size() != 2)
       in_.Fail(res, where, "resolution: expected [width, height]");

@@ -109,11 +109,18 @@ void EmitSensor(YAML::Emitter& out, const RigConfig& rig, const SensorConfig& s)
   }
   if (s.type == SensorType::kCamera) {
     out << YAML::Key << "camera_model" << YAML::Value << s.camera_model;
+    // camera_model mrcal: distortion_model holds mrcal's lens model name (`lensmodel:`) and the
+    // intrinsics are all of mrcal's parameters.
+    const bool mrcal = s.camera_model == "mrcal";
+    if (mrcal)
+      out << YAML::Key << "lensmodel" << YAML::Value << s.distortion_model;
     out << YAML::Key << "intrinsics" << YAML::Value;
     EmitNumbers(out, s.intrinsics);
-    out << YAML::Key << "distortion_model" << YAML::Value << s.distortion_model;
-    out << YAML::Key << "distortion_coeffs" << YAML::Value;
-    EmitNumbers(out, s.distortion_coeffs);
+    if (!mrcal) {
+      out << YAML::Key << "distortion_model" << YAML::Value << s.distortion_model;
+      out << YAML::Key << "distortion_coeffs" << YAML::Value;
+      EmitNumbers(out, s.distortion_coeffs);
+    }
     out << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << s.width
         << s.height << YAML::EndSeq;
     out << YAML::Key << "line_delay" << YAML::Value << FormatDouble(s.line_delay);

@@ -113,15 +113,16 @@ void PerturbCameraIntrinsics(SensorConfig* s, Perturbation p, Random& rng) {
   for (std::size_t i = 0; i < names.size(); ++i) {
     double& value = i < n_intr ? s->intrinsics[i] : s->distortion_coeffs[i - n_intr];
     const std::string& name = names[i];
-    const bool focal = name == "fu" || name == "fv";
-    const bool centre = name == "pu" || name == "pv";
+    // Kalibr's symbols, and mrcal's for camera_model mrcal.
+    const bool focal = name == "fu" || name == "fv" || name == "fx" || name == "fy";
+    const bool centre = name == "pu" || name == "pv" || name == "cx" || name == "cy";
     if (p == Perturbation::kCoarse) {
       if (focal)
         value *= 1.0 + (rng.Bernoulli(0.5) ? kCoarseFocal : -kCoarseFocal);
       else if (centre)
-        value = 0.5 * ((name == "pu" ? s->width : s->height) - 1);
-      else if (i >= n_intr)
-        value = 0.0;
+        value = 0.5 * ((name == "pu" || name == "cx" ? s->width : s->height) - 1);
+      else if (i >= n_intr || (s->camera_model == "mrcal" && i >= 4))
+        value = 0.0;  // the distortion (mrcal's follows its core inside the intrinsics)
       continue;
     }
     const double sigma = (focal || centre) ? kSigmaFocalCentre : kSigmaOtherCamera;

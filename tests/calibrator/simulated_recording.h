@@ -31,9 +31,10 @@ struct SimulatedRecording {
   std::map<std::string, SensorData> data;
 };
 
+// `rig` (the truth's parameters) simulated, with table4 guesses; the default rig unless given.
 inline SimulatedRecording SimulateTable4(sim::Scenario scenario, double duration,
-                                         std::uint64_t seed) {
-  const RigConfig rig = sim::DefaultRig();
+                                         std::uint64_t seed,
+                                         const RigConfig& rig = sim::DefaultRig()) {
   const auto motion = sim::MakeTrajectory(scenario, sim::SceneFor(rig.target));
   const sim::RotatedTrajectory traj(*motion, sim::ScenarioMount(rig));
   sim::SimOptions options;

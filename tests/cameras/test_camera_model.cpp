@@ -97,7 +97,7 @@ TEST(CameraModelFactory, WrongCountsAreClearErrors) {
 
 TEST(CameraModelFactory, UnknownNamesAreClearErrors) {
   EXPECT_EQ(CreateError({"fisheye", {1, 1, 1, 1}, "none", {}}),
-            "unknown camera_model 'fisheye' (expected pinhole, omni, ds or eucm)");
+            "unknown camera_model 'fisheye' (expected pinhole, omni, ds, eucm or mrcal)");
   EXPECT_EQ(CreateError({"pinhole", {1, 1, 1, 1}, "equi", {0, 0, 0, 0}}),
             "camera model 'pinhole' does not take distortion_model 'equi' (expected radtan, "
             "equidistant, none)");

@@ -243,12 +243,22 @@ std::string ParseError(const std::string& text) {
 
 TEST(MrcalInterop, ErrorsNameTheFileLineAndProblem) {
   const std::string ok_tail = "'extrinsics': [0,0,0,0,0,0],\n'imagersize': [640, 480]}\n";
+  EXPECT_EQ(ParseError("{'lensmodel': 'LENSMODEL_FISHEYE',\n'intrinsics': [1,1,1,1],\n" + ok_tail)
+                .rfind("bad.cameramodel:1: unknown mrcal lens model 'LENSMODEL_FISHEYE' (expected "
+                       "LENSMODEL_PINHOLE, ",
+                       0),
+            0u);
+  EXPECT_EQ(ParseError("{'lensmodel': 'LENSMODEL_SPLINED_STEREOGRAPHIC_order=3',\n"
+                       "'intrinsics': [1,1,1,1],\n" +
+                       ok_tail),
+            "bad.cameramodel:1: mrcal lens model 'LENSMODEL_SPLINED_STEREOGRAPHIC_order=3': "
+            "missing or unreadable configuration (e.g. "
+            "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg=100)");
   EXPECT_EQ(
-      ParseError("{'lensmodel': 'LENSMODEL_OPENCV8',\n'intrinsics': [1,1,1,1,0,0,0,0,0,0,0,0],\n" +
+      ParseError("{'lensmodel': 'LENSMODEL_OPENCV8',\n'intrinsics': [500,500,320,240,0,0,0],\n" +
                  ok_tail),
-      "bad.cameramodel:1: mrcal lens model 'LENSMODEL_OPENCV8' has no ctcal camera model "
-      "(mrcal and ctcal share LENSMODEL_OPENCV4 (pinhole + radtan) and LENSMODEL_PINHOLE "
-      "(pinhole + none))");
+      "bad.cameramodel:2: 'LENSMODEL_OPENCV8': mrcal lens model LENSMODEL_OPENCV8 needs 12 "
+      "intrinsics, got 7");
   EXPECT_EQ(
       ParseError("{'lensmodel': 'LENSMODEL_OPENCV4',\n'intrinsics': [500,500,320,240,0,0,0],\n" +
                  ok_tail),

@@ -18,11 +18,13 @@
 #include <utility>
 
 #include "ctcal/calibrator/camera_only/board_frame_corners.h"
+#include "ctcal/calibrator/camera_only/mrcal_board_corner.h"
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/report_data_builder.h"
 #include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
+#include "ctcal/sensors/mrcal_lens.h"
 #include "ctcal/sensors/parameter_names.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/spline/so3_manifold.h"
@@ -47,12 +49,7 @@ struct BoardCornerResidual {
   template <typename T>
   bool operator()(const T* q_W_B, const T* p_W_B, const T* q_B_C, const T* p_B_C, const T* theta,
                   T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> R_W_B(q_W_B);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_W_B(p_W_B);
-    const Eigen::Map<const Eigen::Quaternion<T>> R_B_C(q_B_C);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_B_C(p_B_C);
-    const Eigen::Matrix<T, 3, 1> p_B = R_W_B.conjugate() * (p_W_.cast<T>() - t_W_B);
-    const Eigen::Matrix<T, 3, 1> p_C = R_B_C.conjugate() * (p_B - t_B_C);
+    const Eigen::Matrix<T, 3, 1> p_C = BoardPointInCamera(p_W_, q_W_B, p_W_B, q_B_C, p_B_C);
     Eigen::Matrix<T, 2, 1> uv;
     if (!Model::Project(theta, p_C, &uv))
       return false;
@@ -141,7 +138,14 @@ double ViewSpreadDeg(const std::vector<BoardView>& views) {
 }
 
 bool IsPixelParameter(const std::string& symbol) {
-  return symbol == "fu" || symbol == "fv" || symbol == "pu" || symbol == "pv";
+  return symbol == "fu" || symbol == "fv" || symbol == "pu" || symbol == "pv" || symbol == "fx" ||
+         symbol == "fy" || symbol == "cx" || symbol == "cy";
+}
+
+// Index of the horizontal focal length: the first of the last four intrinsics in SPEC section 4
+// (fu fv pu pv), the first of mrcal's core (fx fy cx cy).
+int FocalIndex(const CameraModel& model) {
+  return model.mrcal_lens() ? 0 : model.NumIntrinsics() - 4;
 }
 
 }  // namespace
@@ -200,7 +204,7 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     for (const CornerObservation& c : corners)
       frames.insert(c.t_ns);
     cam->report.frames = static_cast<int>(frames.size());
-    const int focal_index = cam->model.NumIntrinsics() - 4;
+    const int focal_index = FocalIndex(cam->model);
     bool reinit = false;
     if (cam->config->Estimates(EstimateItem::kIntrinsics)) {
       try {
@@ -210,10 +214,32 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
         reinit = rms_px > options.reinit_rms_px;
         log << "[camera-only] " << name << ": the guessed intrinsics reproject at " << rms_px
             << " px (median over " << guess.views.size() << " views)"
-            << (reinit ? ": re-initialising them from the board views" : "") << "\n";
+            << (!reinit ? ""
+                : cam->model.mrcal_lens()
+                    ? ": kept (an mrcal lens starts from its guess; the solve refines it)"
+                    : ": re-initialising them from the board views")
+            << "\n";
       } catch (const InitError&) {
         reinit = true;  // no pose with the guess: try the intrinsics stage, which says why
       }
+    }
+    bool guess_posed = true;
+    if (reinit && cam->model.mrcal_lens()) {
+      // The intrinsics stage fits SPEC section 4's models only: an mrcal lens starts from its
+      // guess, which the robust bundle adjustment refines when the board poses could be found.
+      try {
+        InitBoardPoses(name, cam->model, board, corners, options.min_corners, options.min_views, {},
+                       threads);
+      } catch (const InitError&) {
+        guess_posed = false;
+      }
+      if (!guess_posed)
+        throw std::runtime_error(
+            "camera-only calibration: " + name + " (mrcal " + cam->model.distortion_model() +
+            "): the guessed intrinsics give no board poses; start from a fit of a simpler model "
+            "(OPENCV4/5/8 take a pinhole-radtan fit's numbers, zeros for the rest; a splined "
+            "model the focal length and centre with zero control points)");
+      reinit = false;
     }
     if (reinit) {
       IntrinsicsInitOptions init_options;
@@ -339,6 +365,12 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
     const PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
     const PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
+    if (cam.model.mrcal_lens()) {
+      const double* blocks[5] = {T_W_B.q(), T_W_B.p(), T_B_C.q(), T_B_C.p(),
+                                 cam.model.params().data()};
+      return MrcalBoardCornerCost(cam.model.shared_mrcal_lens(), t.p_W, t.uv, t.sigma)
+          .Evaluate(blocks, r, nullptr);
+    }
     return VisitCameraModel(cam.model.type(), [&](auto model) {
       return BoardCornerResidual<decltype(model)>(t.p_W, t.uv, t.sigma)(
           T_W_B.q(), T_W_B.p(), T_B_C.q(), T_B_C.p(), cam.model.params().data(), r);
@@ -362,13 +394,16 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       CameraState& cam = *cams[static_cast<std::size_t>(t.camera)];
       PoseBlock& T_B_C = t.camera == 0 ? ref_T_B_C : cam.T_B_C;
       PoseBlock& T_W_B = poses[static_cast<std::size_t>(t.pose)];
-      ceres::CostFunction* cost = VisitCameraModel(cam.model.type(), [&](auto model) {
-        using Model = decltype(model);
-        return static_cast<ceres::CostFunction*>(
-            new ceres::AutoDiffCostFunction<BoardCornerResidual<Model>, 2, 4, 3, 4, 3,
-                                            Model::kNumParams>(
-                new BoardCornerResidual<Model>(t.p_W, t.uv, t.sigma)));
-      });
+      ceres::CostFunction* cost =
+          cam.model.mrcal_lens()
+              ? new MrcalBoardCornerCost(cam.model.shared_mrcal_lens(), t.p_W, t.uv, t.sigma)
+              : VisitCameraModel(cam.model.type(), [&](auto model) {
+                  using Model = decltype(model);
+                  return static_cast<ceres::CostFunction*>(
+                      new ceres::AutoDiffCostFunction<BoardCornerResidual<Model>, 2, 4, 3, 4, 3,
+                                                      Model::kNumParams>(
+                          new BoardCornerResidual<Model>(t.p_W, t.uv, t.sigma)));
+                });
       problem.AddResidualBlock(cost, loss, T_W_B.q(), T_W_B.p(), T_B_C.q(), T_B_C.p(),
                                cam.model.mutable_params());
     }
@@ -420,13 +455,34 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     return std::shared_ptr<ceres::ParameterBlockOrdering>(ordering);
   };
   std::shared_ptr<ceres::ParameterBlockOrdering> ordering;
+  const bool any_mrcal = std::any_of(cams.begin(), cams.end(),
+                                     [](const auto& cam) { return cam->model.mrcal_lens(); });
+  // mrcal's regularisation of each mrcal lens whose intrinsics are estimated, scaled to the
+  // camera's inlier corner residuals (MrcalLens::MakeRegularization).
+  auto add_regularization = [&](ceres::Problem& problem) {
+    for (std::size_t c = 0; c < cams.size(); ++c) {
+      CameraState& cam = *cams[c];
+      if (!cam.model.mrcal_lens() || !cam.config->Estimates(EstimateItem::kIntrinsics))
+        continue;
+      double measurements = 0.0;
+      for (const CornerTerm& t : terms)
+        measurements += (t.inlier && t.camera == static_cast<int>(c)) ? 2.0 : 0.0;
+      auto cost = std::make_unique<MrcalRegularizationCost>(
+          cam.model.mrcal_lens()->MakeRegularization(cam.model.resolution(), measurements));
+      if (cost->NumTerms() > 0)
+        problem.AddResidualBlock(cost.release(), nullptr, cam.model.mutable_params());
+    }
+  };
   auto build = [&](ceres::Problem& problem, bool robust,
                    std::vector<CornerMeasurement>* measurements) {
     ordering.reset();
-    if (options.per_corner_blocks)
+    // An mrcal lens has per-corner blocks only (its parameter count is a run-time number), and a
+    // problem holds the board poses in one form: then every camera takes per-corner blocks.
+    if (options.per_corner_blocks || any_mrcal)
       add_corner_blocks(problem, robust ? &huber : nullptr);
     else
       ordering = add_frame_blocks(problem, robust ? options.huber_whitened : 0.0, measurements);
+    add_regularization(problem);
     for (std::size_t c = 0; c < cams.size(); ++c) {
       CameraState& cam = *cams[c];
       PoseBlock& T_B_C = c == 0 ? ref_T_B_C : cam.T_B_C;
@@ -589,12 +645,30 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
     const CalibrationCovariance cov = InvertInformation(info);
     result.report_data.correlation =
         CorrelationFromCovariance(cov.covariance, info.names, cov.undetermined);
+    // A splined lens's core and control points trade against each other, and its control
+    // points outside the observed area are held by the regularisation alone: mrcal judges such a
+    // lens by its projection, not per parameter. Its undetermined parameters are counted in one
+    // warning instead of one "not determined" each (their sigma stays .inf).
+    std::map<std::string, int> regularised;
     for (std::size_t i = 0; i < info.names.size(); ++i) {
       sigma_of[info.names[i]] = cov.undetermined[i] ? std::numeric_limits<double>::infinity()
                                                     : cov.sigma(static_cast<Eigen::Index>(i));
-      if (cov.undetermined[i])
-        obs.unobservable.push_back(info.names[i]);
+      if (!cov.undetermined[i])
+        continue;
+      const std::string& n = info.names[i];
+      const auto splined = std::find_if(cams.begin(), cams.end(), [&](const auto& cam) {
+        return cam->model.mrcal_lens() && cam->model.mrcal_lens()->IsSplined() &&
+               n.rfind(cam->config->name + ".intrinsics[", 0) == 0;
+      });
+      if (splined != cams.end())
+        ++regularised[(*splined)->config->name];
+      else
+        obs.unobservable.push_back(n);
     }
+    for (const auto& [name, count] : regularised)
+      warn(name + ": " + std::to_string(count) +
+           " parameters of its splined lens are set by mrcal's regularisation, not by the data "
+           "(sigma .inf): judge the lens by its projection (ctcal compare --projection)");
     for (int col : cov.null_directions) {
       ObservabilityDirection d;
       d.eigenvalue = cov.scaled_eigenvalues(col);
@@ -638,8 +712,9 @@ CameraOnlyResult CalibrateCameraOnly(const RigConfig& rig,
       fill("R_B_S", 3);
       fill("t_B_S", 3);
     }
-    if (cam.config->Estimates(EstimateItem::kIntrinsics)) {
-      const int fi = cam.model.NumIntrinsics() - 4;
+    const bool splined = cam.model.mrcal_lens() && cam.model.mrcal_lens()->IsSplined();
+    if (cam.config->Estimates(EstimateItem::kIntrinsics) && !splined) {
+      const int fi = FocalIndex(cam.model);
       std::vector<std::string> weak;
       std::ostringstream why;
       for (int i = fi; i < fi + 2; ++i) {

@@ -25,6 +25,12 @@ DiscreteCalibrationResult CalibrateDiscrete(const RigConfig& rig,
     options.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (rig.IsCameraOnly())
     throw CalibrationInputError("camera-only rigs have no inertial states: use --method spline");
+  for (const SensorConfig& s : rig.sensors) {
+    // The discrete method's corner factors are compiled per SPEC section 4 model.
+    if (s.type == SensorType::kCamera && s.camera_model == "mrcal")
+      throw CalibrationInputError("sensors." + s.name +
+                                  ": camera_model mrcal runs with --method spline only");
+  }
   SplineCalibratorOptions so;
   so.threads = options.threads;
   so.max_iterations = options.max_iterations;

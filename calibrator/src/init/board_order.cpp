@@ -85,11 +85,13 @@ std::vector<BoardView> PosesOf(const SensorConfig& s, const std::vector<CornerOb
                                const Board& board, const BoardOrderOptions& options) {
   CameraModel model = CameraModel::Create(s.camera_model, s.intrinsics, s.distortion_model,
                                           s.distortion_coeffs, Eigen::Vector2i(s.width, s.height));
-  const int focal = model.NumIntrinsics() - 4;
+  // fx leads mrcal's intrinsics; SPEC section 4's end with fu fv pu pv.
+  const int focal = model.mrcal_lens() ? 0 : model.NumIntrinsics() - 4;
   try {
     BoardPosesResult guess =
         InitBoardPoses(s.name, model, board, corners, options.min_corners, 0, {}, options.threads);
-    if (guess.median_rms_ray * model.params()(focal) <= options.reinit_rms_px)
+    // The intrinsics stage fits SPEC section 4's models only: an mrcal lens keeps its guess.
+    if (guess.median_rms_ray * model.params()(focal) <= options.reinit_rms_px || model.mrcal_lens())
       return std::move(guess.views);
   } catch (const InitError&) {
     // no pose with the guess: the intrinsics from the views below

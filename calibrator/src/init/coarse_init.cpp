@@ -205,7 +205,11 @@ class CoarseInit {
     };
     if (frames < options_.min_views)
       throw too_few(frames);
-    if (s.config.Estimates(EstimateItem::kIntrinsics)) {
+    // The intrinsics stage fits SPEC section 4's models only: an mrcal lens keeps its guess.
+    if (s.config.Estimates(EstimateItem::kIntrinsics) && s.camera->mrcal_lens()) {
+      Log("    " + s.name() + ".intrinsics: mrcal " + s.camera->distortion_model() +
+          ", guess kept");
+    } else if (s.config.Estimates(EstimateItem::kIntrinsics)) {
       std::optional<IntrinsicsInitResult> r;
       try {
         r.emplace(InitCameraIntrinsics(s.name(), *s.camera, board_, d.corners, options_.intrinsics,

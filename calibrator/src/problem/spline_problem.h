@@ -39,6 +39,7 @@ using residual_internal::Jacobian;
 #include "ctcal/calibrator/residuals/frame_corners_residual.h"
 #include "ctcal/calibrator/residuals/inertial_block_residual.h"
 #include "ctcal/calibrator/residuals/inertial_row_groups.h"
+#include "ctcal/calibrator/residuals/mrcal_corner_residual.h"
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
@@ -336,11 +337,13 @@ class SplineProblem {
 
   // Whether the camera's corners enter as compressed per-frame blocks: the analytic path of a
   // global-shutter camera (line_delay 0 and not estimated); rolling shutter reads every corner at
-  // its own row time, so its corners keep one block each.
+  // its own row time, so its corners keep one block each. An mrcal lens (run-time parameter
+  // count) has per-corner blocks only (mrcal_corner_residual.h).
   bool Compressed(const PreparedCamera& cam) const {
     const SensorState& s = *cam.state;
     return options_.analytic && options_.compress_frames &&
-           !s.config.Estimates(EstimateItem::kLineDelay) && s.line_delay == 0.0;
+           !s.config.Estimates(EstimateItem::kLineDelay) && s.line_delay == 0.0 &&
+           !s.camera->mrcal_lens();
   }
 
   ceres::Problem& problem() { return *problem_; }

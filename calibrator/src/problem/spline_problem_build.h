@@ -175,7 +175,7 @@ void SplineProblem<N, Rep>::AddCamera(PreparedCamera* cam, bool robust) {
     p.line_delay = &s.line_delay;
     p.params = s.camera->mutable_params();
     ceres::CostFunction* cost =
-        MakeCornerResidual<N, Rep>(options_.analytic, s.camera->type(), cam->Measurement(i), clock);
+        MakeCameraCornerResidual<N, Rep>(options_.analytic, *s.camera, cam->Measurement(i), clock);
     if (robust)
       loss = new ceres::HuberLoss(options_.huber_threshold);
     camera_ids_.back().push_back(

@@ -239,8 +239,8 @@ bool SplineProblem<N, Rep>::EvaluateCorner(const PreparedCamera& cam, std::size_
   SensorState& s = *cam.state;
   const std::int64_t stamp = cam.Stamp(i);
   const int seg = SegmentOf(stamp, s.time_offset + cam.corners[i].uv.y() * s.line_delay);
-  const std::unique_ptr<ceres::CostFunction> cost(MakeCornerResidual<N, Rep>(
-      true, s.camera->type(), cam.Measurement(i), SegmentClock::At(stamp, spline_.timing(), seg)));
+  const std::unique_ptr<ceres::CostFunction> cost(MakeCameraCornerResidual<N, Rep>(
+      true, *s.camera, cam.Measurement(i), SegmentClock::At(stamp, spline_.timing(), seg)));
   typename CornerResidual<N, Rep>::Parameters p;
   p.traj = TrajBlocks(seg);
   p.q_B_C = s.q_B_S.data();

@@ -193,6 +193,8 @@ inline Eigen::VectorXd CameraParams(CameraModelType type) {
       p.resize(6);
       p << 0.6, 1.1, 380, 382, 320, 245;
       break;
+    case CameraModelType::kMrcal:  // not a compile-time model: the residuals take it elsewhere
+      break;
   }
   return p;
 }

@@ -14,7 +14,9 @@
 
 namespace ctcal {
 
-// Every (camera_model, distortion_model) pair of SPEC section 4.
+// Every (camera_model, distortion_model) pair of SPEC section 4, and kMrcal: any lens model of
+// libmrcal (`camera_model: mrcal` with its `lensmodel:`, docs/camera_models.md), whose parameter
+// count is known at run time only (mrcal_lens.h).
 enum class CameraModelType {
   kPinholeRadtan,
   kPinholeEquidistant,
@@ -23,6 +25,7 @@ enum class CameraModelType {
   kOmniNone,
   kDoubleSphere,
   kEucm,
+  kMrcal,
 };
 
 // Out-pointer for a Jacobian d out / d in with the scalar of the call. The scalar sits in a

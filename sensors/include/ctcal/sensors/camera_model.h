@@ -16,6 +16,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,8 +31,11 @@
 
 namespace ctcal {
 
+class MrcalLens;  // mrcal_lens.h
+
 // Calls f(Model{}) for the model struct of `type` and returns its result (all branches must
-// return the same type).
+// return the same type). An mrcal lens (kMrcal) has no compile-time model: callers handle it
+// before (CameraModel::mrcal_lens()); reaching here with one is a programming error.
 template <typename F>
 decltype(auto) VisitCameraModel(CameraModelType type, F&& f) {
   switch (type) {
@@ -48,11 +53,15 @@ decltype(auto) VisitCameraModel(CameraModelType type, F&& f) {
       return std::forward<F>(f)(DoubleSphereModel{});
     case CameraModelType::kEucm:
       break;
+    case CameraModelType::kMrcal:
+      throw std::logic_error(
+          "an mrcal lens model has no compile-time camera model (use CameraModel's mrcal path)");
   }
   return std::forward<F>(f)(EucmModel{});
 }
 
-// All model types, for loops in tests and tools.
+// All model types of SPEC section 4 (not kMrcal, which needs a lens model name), for loops in
+// tests and tools.
 inline constexpr CameraModelType kAllCameraModelTypes[] = {
     CameraModelType::kPinholeRadtan, CameraModelType::kPinholeEquidistant,
     CameraModelType::kPinholeNone,   CameraModelType::kOmniRadtan,
@@ -87,13 +96,25 @@ class CameraModel {
                             const std::vector<double>& distortion_coeffs,
                             const Eigen::Vector2i& resolution);
 
+  // camera_model "mrcal" takes mrcal's lens model name as its distortion_model (the rig file's
+  // `lensmodel:` key) and mrcal's whole intrinsics vector (core then distortions) as intrinsics;
+  // its distortion_coeffs are empty.
+
   // params = intrinsics followed by distortion_coeffs (SPEC order); throws like Create.
+  // (Not for kMrcal, which needs its lens: Create or the constructor below.)
   CameraModel(CameraModelType type, const Eigen::VectorXd& params,
+              const Eigen::Vector2i& resolution);
+  // An mrcal camera: its lens and mrcal's intrinsics vector; throws like Create.
+  CameraModel(std::shared_ptr<const MrcalLens> lens, const Eigen::VectorXd& params,
               const Eigen::Vector2i& resolution);
 
   CameraModelType type() const { return type_; }
   std::string camera_model() const { return CameraModelName(type_); }
-  std::string distortion_model() const { return DistortionModelName(type_); }
+  // For kMrcal: mrcal's lens model name (LENSMODEL_OPENCV8, ...).
+  std::string distortion_model() const;
+  // The mrcal lens of a kMrcal camera (projection through libmrcal); nullptr for the others.
+  const MrcalLens* mrcal_lens() const { return mrcal_lens_.get(); }
+  const std::shared_ptr<const MrcalLens>& shared_mrcal_lens() const { return mrcal_lens_; }
 
   int NumParams() const { return static_cast<int>(params_.size()); }
   // Length of the `intrinsics` part (the rest are `distortion_coeffs`).
@@ -132,6 +153,7 @@ class CameraModel {
 
  private:
   CameraModelType type_;
+  std::shared_ptr<const MrcalLens> mrcal_lens_;  // kMrcal only
   Eigen::VectorXd params_;
   Eigen::Vector2i resolution_;
 };

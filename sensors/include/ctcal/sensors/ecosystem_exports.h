@@ -44,9 +44,10 @@ std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::st
 std::optional<std::string> EmitOpenVinsImuChain(const RigConfig& rig, std::string* why,
                                                 std::vector<std::string>* notes = nullptr);
 
-// Writes calibration.json, kalibr_imucam_chain.yaml and kalibr_imu_chain.yaml into `dir` where
-// the rig allows; returns the paths written; `notes` gets why a file was not written and what
-// was left out. Throws std::runtime_error when a file cannot be written.
+// Writes calibration.json, kalibr_imucam_chain.yaml, kalibr_imu_chain.yaml and each camera's
+// mrcal <camera>.cameramodel (mrcal_model.h) into `dir` where the rig allows; returns the paths
+// written; `notes` gets why a file was not written and what was left out. Throws std::runtime_error
+// when a file cannot be written.
 std::vector<std::string> SaveEcosystemExports(const RigConfig& rig, const std::string& dir,
                                               std::vector<std::string>* notes);
 

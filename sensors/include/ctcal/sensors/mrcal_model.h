@@ -1,12 +1,14 @@
-// mrcal interoperability: read and write mrcal's `.cameramodel` files for the camera models
-// mrcal and ctcal share.
+// mrcal interoperability: read and write mrcal's `.cameramodel` files for every lens model mrcal
+// has.
 //
 //   ctcal (SPEC section 4)   mrcal                 parameters (same order, same values)
 //   pinhole + radtan          LENSMODEL_OPENCV4     fx, fy, cx, cy, k1, k2, p1, p2
 //   pinhole + none            LENSMODEL_PINHOLE     fx, fy, cx, cy
-// Every other model on either side is a clear error: mrcal has no Kalibr equidistant, omni, ds or
-// eucm model, and its higher OpenCV, CAHVOR(E), LONLAT/LATLON, stereographic and splined models
-// have no ctcal equivalent.
+//   mrcal + <lensmodel>       <lensmodel>           mrcal's intrinsics (mrcal_lens.h)
+// A file of OPENCV4 or PINHOLE reads as ctcal's own model; any other mrcal lens model (OPENCV5/8/
+// 12, CAHVOR(E), LONLAT/LATLON, STEREOGRAPHIC, SPLINED_STEREOGRAPHIC) as a camera of
+// camera_model mrcal. Writing: the two shared models and every mrcal camera; Kalibr's
+// equidistant, omni, ds and eucm have no mrcal lens model and are a clear error.
 //
 // Pixel convention: mrcal, like OpenCV and Kalibr, puts pixel (0,0) at the centre of the top-left
 // pixel (mrcal.sample_imager() spans 0 .. W-1, its OpenCV models are OpenCV's formulas and
@@ -26,6 +28,8 @@
 
 #include "ctcal/sensors/camera_model.h"
 
+#include <vector>
+
 namespace ctcal {
 
 using MrcalRt = Eigen::Matrix<double, 6, 1>;
@@ -43,12 +47,20 @@ std::string MrcalLensModelName(CameraModelType type);
 CameraModelType FromMrcalLensModelName(const std::string& lensmodel);
 
 // The .cameramodel text / file of a camera (numbers written with 17 significant digits, so reading
-// it back is exact). Throws std::invalid_argument for a model mrcal does not share, and
+// it back is exact). Throws std::invalid_argument for a model mrcal does not have, and
 // std::runtime_error when the file cannot be written.
 std::string EmitMrcalCameraModel(const CameraModel& camera,
                                  const MrcalRt& rt_cam_ref = MrcalRt::Zero());
 void SaveMrcalCameraModel(const std::string& path, const CameraModel& camera,
                           const MrcalRt& rt_cam_ref = MrcalRt::Zero());
+
+struct RigConfig;
+// The exports of a result (docs/files.md "Exports"): DIR/<camera>.cameramodel for every camera
+// whose model mrcal has, mrcal's reference frame being the first camera's (its extrinsics are
+// identity; another's are rt of T_C_C0). Returns the paths written; `notes` gets one line per
+// camera not written and why. Throws std::runtime_error when a file cannot be written.
+std::vector<std::string> SaveMrcalCameraModels(const RigConfig& rig, const std::string& dir,
+                                               std::vector<std::string>* notes);
 
 // Parses a .cameramodel; every error is a std::runtime_error "<source>:<line>: <what>".
 MrcalCameraModel ParseMrcalCameraModel(const std::string& text, const std::string& source);

@@ -105,6 +105,19 @@ class CornerResidual {
     return sizes;
   }
 
+  // p_C of the model above on any scalar, from the blocks up to line_delay (params unused).
+  template <typename T>
+  static Vec3T<T> PointInCamera(T const* const* p, const CornerMeasurement& m,
+                                const SegmentClock& clock) {
+    const T shift = p[kTimeOffset][0] + T(m.uv.y()) * p[kLineDelay][0];
+    Se3Kinematics<T> kin;
+    Spline::template EvaluateSegment<T>(p, clock.U(shift), T(clock.inv_dt), 0, nullptr, &kin);
+    const Mat3T<T> R_B_C = Eigen::Map<const QuatT<T>>(p[kQ_B_C]).toRotationMatrix();
+    const Eigen::Map<const Vec3T<T>> t_B_C(p[kT_B_C]);
+    const Vec3T<T> p_B = kin.R_W_B.transpose() * (m.p_W.cast<T>() - kin.p_W_B);
+    return R_B_C.transpose() * (p_B - t_B_C);
+  }
+
   // (a) The templated functor: the model above on any scalar (the autodiff path).
   template <class Model>
   struct Functor {
@@ -113,13 +126,7 @@ class CornerResidual {
 
     template <typename T>
     bool operator()(T const* const* p, T* residuals) const {
-      const T shift = p[kTimeOffset][0] + T(m.uv.y()) * p[kLineDelay][0];
-      Se3Kinematics<T> kin;
-      Spline::template EvaluateSegment<T>(p, clock.U(shift), T(clock.inv_dt), 0, nullptr, &kin);
-      const Mat3T<T> R_B_C = Eigen::Map<const QuatT<T>>(p[kQ_B_C]).toRotationMatrix();
-      const Eigen::Map<const Vec3T<T>> t_B_C(p[kT_B_C]);
-      const Vec3T<T> p_B = kin.R_W_B.transpose() * (m.p_W.cast<T>() - kin.p_W_B);
-      const Vec3T<T> p_C = R_B_C.transpose() * (p_B - t_B_C);
+      const Vec3T<T> p_C = PointInCamera<T>(p, m, clock);
       Eigen::Matrix<T, 2, 1> uv;
       if (!Model::template Project<T>(p[kParams], p_C, &uv))
         return false;
