@@ -10,8 +10,8 @@ with messages generated from their definitions (genpy), `ros2` as a ROS2 bag (me
 one sqlite3 .db3) with its own CDR encoder; neither shares code with ctcal. Every sensor folder
 with a data.csv is a topic: /<name> (sensor_msgs/Imu; a gyro's linear_acceleration zero) or
 /<name>/image_raw (sensor_msgs/Image in encoding E, or sensor_msgs/CompressedImage for E = jpeg
-or png). --bad writes one defect: stamps_back (the second message of the first topic stamped
-before the first), unknown_type (the first inertial topic as geometry_msgs/Vector3Stamped),
+or png). --bad writes one defect: stamps_back (the second message of the first sensor's topic,
+in name order, stamped before its first: cam0's before imu0's), unknown_type (the first inertial topic as geometry_msgs/Vector3Stamped),
 encoding (cameras in bayer_rggb8). `dump` prints one line per message: topic, type, header stamp
 in ns, and for images encoding and size.
 """
@@ -109,10 +109,12 @@ def messages(data, encoding, bad):
     """Every message in time order: (t_ns, topic, type, fields, header stamp)."""
     out = []
     first_inertial = True
+    topics = []
     for name, kind, rows in sensors_of(data):
         if kind == "camera":
             enc = "bayer_rggb8" if bad == "encoding" else encoding
             mtype = "sensor_msgs/CompressedImage" if enc in ("jpeg", "png") else "sensor_msgs/Image"
+            topics.append("/%s/image_raw" % name)
             for r in rows:
                 path = os.path.join(data, name, "data", r[1])
                 out.append((int(r[0]), "/%s/image_raw" % name, mtype, (path, enc), int(r[0])))
@@ -121,14 +123,17 @@ def messages(data, encoding, bad):
             if bad == "unknown_type" and first_inertial:
                 mtype = "geometry_msgs/Vector3Stamped"
             first_inertial = False
+            topics.append("/" + name)
             for r in rows:
                 w = [float(x) for x in r[1:4]]
                 a = [float(x) for x in r[4:7]] if kind == "imu" else [0.0, 0.0, 0.0]
                 out.append((int(r[0]), "/" + name, mtype, (w, a), int(r[0])))
     out.sort(key=lambda m: m[0])
     if bad == "stamps_back":
-        # The record keeps its place and time; only its header stamp goes back.
-        topic = out[0][1]
+        # The record keeps its place and time; only its header stamp goes back. The first sensor
+        # by name, not the first message's topic: an IMU starting before the cameras would take
+        # the defect away from the image topics.
+        topic = topics[0]
         idx = [i for i, m in enumerate(out) if m[1] == topic][:2]
         m = out[idx[1]]
         out[idx[1]] = m[:4] + (out[idx[0]][0] - 1000,)

@@ -6,9 +6,11 @@
 #include <sqlite3.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
+#include <system_error>
 
 #include "ctcal/sensors/ros_bag.h"
 
@@ -39,6 +41,12 @@ class Database {
       sqlite3_close(db_);
       throw std::runtime_error(path + ": " + why);
     }
+    try {
+      CheckNotCut();
+    } catch (...) {
+      sqlite3_close(db_);
+      throw;
+    }
   }
   ~Database() { sqlite3_close(db_); }
   Database(const Database&) = delete;
@@ -64,6 +72,29 @@ class Database {
   }
 
  private:
+  // A database cut short (a recording stopped by a crash, a copy interrupted) is refused whole:
+  // SQLite reads what is left, and when the lost pages hold only the index or the last rows, the
+  // queries succeed on a silently shorter recording. Its header (page 1, always present when the
+  // file is a database at all) counts the pages the file was written with: fewer bytes on disk
+  // than page_count x page_size is a cut. (A database in write-ahead mode keeps its newest pages
+  // in the -wal file beside it; SQLite counts them in page_count, so that case is left to the
+  // queries.)
+  void CheckNotCut() const {
+    std::int64_t pages = 0, page_size = 0;
+    Query("PRAGMA page_count", [&](sqlite3_stmt* s) { pages = sqlite3_column_int64(s, 0); });
+    Query("PRAGMA page_size", [&](sqlite3_stmt* s) { page_size = sqlite3_column_int64(s, 0); });
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(path_, ec);
+    if (ec || fs::exists(path_ + "-wal"))
+      return;
+    const auto expected = static_cast<std::uintmax_t>(pages * page_size);
+    if (size < expected) {
+      throw std::runtime_error(path_ + ": the file has " + std::to_string(size) +
+                               " bytes but its database " + std::to_string(expected) +
+                               " (the recording was cut short)");
+    }
+  }
+
   std::string path_;
   sqlite3* db_ = nullptr;
 };

@@ -167,6 +167,41 @@ TEST(Compare, RotationErrorIsTheLeftPerturbationAndVectorsSubtract) {
   EXPECT_NEAR(*c.summary.worst_error_over_sigma, 4.0, 1e-9);
 }
 
+// Only gravity's direction is estimated; its magnitude is the rig's gravity_magnitude. A result
+// that assumed 9.81 against a truth of 9.80665 (standard gravity) with the same direction has no
+// gravity error; a turned direction gives the error of the direction at the result's magnitude.
+TEST(Compare, GravityIsComparedAtTheResultsMagnitude) {
+  RigConfig truth = Example();
+  truth.gravity_magnitude = 9.80665;
+  const Eigen::Vector3d g_true(-0.6747590697894152, -9.575547194550543, -2.0059861278613442);
+  truth.gravity_W = g_true;
+  RigConfig result = truth;
+  result.gravity_magnitude = 9.81;
+  result.gravity_W = g_true.normalized() * 9.81;
+  result.sigma_gravity_W = Eigen::Vector3d(3e-3, 6.7e-4, 3e-3);
+  auto errors = [&] {
+    Eigen::Vector3d e = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    for (const ComparisonRow& r : CompareRigs(truth, result).rows) {
+      if (r.name.rfind("gravity_W[", 0) == 0)
+        e(r.name[10] - '0') = r.error;
+    }
+    return e;
+  };
+  // Without the magnitude taken out, gravity_W[1] would be off by 0.00327 (4.9 sigma).
+  EXPECT_LT(errors().cwiseAbs().maxCoeff(), 1e-14);
+  // A direction turned by 0.01 rad about x: the error is that turn of the result's 9.81 vector.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  result.gravity_W = R * g_true.normalized() * 9.81;
+  EXPECT_LT((errors() - (R - Eigen::Matrix3d::Identity()) * g_true.normalized() * 9.81)
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-14);
+  // Equal magnitudes: the truth as it is (a vector subtraction, whatever the norms).
+  result.gravity_magnitude = truth.gravity_magnitude;
+  result.gravity_W = g_true + Eigen::Vector3d(0.0, 0.01, 0.0);
+  EXPECT_EQ(errors(), Eigen::Vector3d(0.0, (g_true(1) + 0.01) - g_true(1), 0.0));
+}
+
 TEST(Compare, JsonHasTheSpecKeysAndNullForUndetermined) {
   const RigConfig truth = Example();
   RigConfig result = truth;
