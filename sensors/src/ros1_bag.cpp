@@ -3,17 +3,113 @@
 // (ros_messages.cpp), so no generated message code or ROS runtime is needed.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <cstdint>
+#include <fstream>
 #include <map>
+#include <set>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "ctcal/sensors/ros_bag.h"
 
 namespace ctcal {
 namespace {
 
+// A ROS1 bag (format 2.0) is "#ROSBAG V2.0\n" and then records, each a little-endian uint32
+// header length, the header, a uint32 data length and the data. librosbag_storage allocates what
+// a record's header length says before reading it, so a damaged length (the fuzzer's 7.8 KB bag
+// whose connection record claims a 2.3 GB header) costs gigabytes before any error. The top-level
+// records (bag header, chunks, the index's connection and chunk-info records) are walked here
+// first, seeking over the data, and any length beyond the file's end is refused by name; a cut
+// file is refused the same way. Chunk contents are left to the library (its chunk reader
+// bounds them by the chunk's size).
+void CheckRecordLengths(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in)
+    return;  // the library's own open names the file
+  const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
+  const std::string magic = "#ROSBAG V2.0\n";
+  std::string head(magic.size(), '\0');
+  in.seekg(0);
+  if (!in.read(&head[0], static_cast<std::streamsize>(head.size())) || head != magic)
+    return;  // not a 2.0 bag: the library's open says what it is
+  std::uint64_t pos = magic.size();
+  const auto read_u32 = [&](std::uint32_t* v) {
+    unsigned char b[4];
+    in.seekg(static_cast<std::streamoff>(pos));
+    if (!in.read(reinterpret_cast<char*>(b), 4))
+      return false;
+    *v = static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
+         static_cast<std::uint32_t>(b[2]) << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+    pos += 4;
+    return true;
+  };
+  const auto damaged = [&](const std::string& what, std::uint64_t at, std::uint64_t length) {
+    return std::runtime_error(path + ": the record at byte " + std::to_string(at) + " declares " +
+                              what + " of " + std::to_string(length) + " bytes, past the file's " +
+                              "end (" + std::to_string(size) + " bytes): a damaged or cut bag");
+  };
+  // A header field `name=value` read as a little-endian uint64 (index_pos, chunk_pos).
+  const auto field_u64 = [](const std::string& header, const std::string& name,
+                            std::uint64_t* value) {
+    for (std::size_t i = 0; i + 4 <= header.size();) {
+      const auto* b = reinterpret_cast<const unsigned char*>(header.data() + i);
+      const std::uint64_t len =
+          b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint64_t>(b[3]) << 24;
+      i += 4;
+      if (len > header.size() - i)
+        return false;
+      const std::string f = header.substr(i, static_cast<std::size_t>(len));
+      i += static_cast<std::size_t>(len);
+      if (f.size() == name.size() + 1 + 8 && f.compare(0, name.size() + 1, name + "=") == 0) {
+        *value = 0;
+        for (int k = 7; k >= 0; --k)
+          *value = *value << 8 | static_cast<unsigned char>(f[name.size() + 1 + k]);
+        return true;
+      }
+    }
+    return false;
+  };
+  // Where the library will seek to: the bag header's index_pos and each chunk info's chunk_pos
+  // must be the start of a record, or it reads a length from the middle of one.
+  std::set<std::uint64_t> starts;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> targets;  // (record at, position)
+  std::string header;
+  while (pos < size) {
+    const std::uint64_t at = pos;
+    starts.insert(at);
+    std::uint32_t header_len = 0, data_len = 0;
+    if (size - pos < 4 || !read_u32(&header_len))
+      throw damaged("a header length field", at, 4);
+    if (header_len > size - pos)
+      throw damaged("a header", at, header_len);
+    header.resize(header_len);
+    if (!in.read(&header[0], static_cast<std::streamsize>(header_len)))
+      throw damaged("a header", at, header_len);
+    pos += header_len;
+    std::uint64_t target = 0;
+    if (field_u64(header, "index_pos", &target) || field_u64(header, "chunk_pos", &target))
+      targets.emplace_back(at, target);
+    if (size - pos < 4 || !read_u32(&data_len))
+      throw damaged("a data length field", at, 4);
+    if (data_len > size - pos)
+      throw damaged("data", at, data_len);
+    pos += data_len;
+  }
+  for (const auto& [at, target] : targets) {
+    if (target != 0 && !starts.count(target))
+      throw std::runtime_error(path + ": the record at byte " + std::to_string(at) +
+                               " points to byte " + std::to_string(target) +
+                               ", which starts no record: a damaged bag");
+  }
+}
+
 class Ros1BagReader : public RosBagReader {
  public:
   explicit Ros1BagReader(const std::string& path) : path_(path) {
+    CheckRecordLengths(path);
     try {
       bag_.open(path, rosbag::bagmode::Read);
       rosbag::View all(bag_);

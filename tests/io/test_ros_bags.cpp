@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -294,6 +295,25 @@ TEST(RosBags, TruncatedBagsAreOneError) {
       EXPECT_THAT(LoadError(cut), HasSubstr(cut + ": ")) << fraction;
     }
   }
+}
+
+// The fuzzer's finding (docs/fuzzing.md): a 7.8 KB bag whose record after the bag header claims
+// a 539 MB header (and whose index claims a 2.3 GB connection header). librosbag_storage would
+// allocate what the length says; ctcal refuses the bag by the record's byte offset first. The
+// input keeps the fuzz target's first byte (even: "a bag file"), dropped here.
+TEST(RosBags, RecordLengthsPastTheFileEndAreRefusedBeforeAnyAllocation) {
+  const std::string input =
+      std::string(CTCAL_SOURCE_DIR) + "/tests/data/fuzz/ros1_bag_huge_connection_header.bag";
+  std::ifstream in(input, std::ios::binary);
+  ASSERT_TRUE(in) << input;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  const std::string bag = Out("huge_header.bag").string();
+  std::ofstream(bag, std::ios::binary)
+      .write(bytes.data() + 1, static_cast<std::streamsize>(bytes.size() - 1));
+  const std::string error = LoadError(bag);
+  EXPECT_THAT(error, HasSubstr(bag + ": the record at byte 4117 declares a header of 538976288"));
+  EXPECT_THAT(error, HasSubstr("a damaged or cut bag"));
 }
 
 TEST(RosBags, Mcap2StorageIsRefusedByName) {
