@@ -61,7 +61,7 @@ TEST(ModelError, SubsetsAreInterleavedBlocksOfCameraFrames) {
       if (s.type == SensorType::kCamera)
         d.corners.push_back({t, 0, 1.0, 2.0, std::nullopt});
       else
-        d.imu.push_back({t, {}, {}});
+        d.imu.push_back({t, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
     }
   }
   CrossValidationOptions options;
