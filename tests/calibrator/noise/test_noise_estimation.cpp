@@ -11,7 +11,7 @@
 #include <string>
 
 #include "ctcal/calibrator/spline_calibrator.h"
-#include "simulated_recording.h"
+#include "../simulated_recording.h"
 
 namespace ctcal {
 namespace {
