@@ -21,6 +21,7 @@
 #include <unordered_set>
 
 #include "../solver/normal_equations.h"
+#include "../solver/parameter_order.h"
 
 namespace ctcal {
 namespace {
@@ -60,8 +61,7 @@ MarginalInformation ComputeMarginalInformation(
   out.unit = Eigen::Map<const Eigen::VectorXd>(units.data(), static_cast<int>(units.size()));
 
   // Nuisance columns first, calibration last, so the Schur complement is the bottom-right block.
-  std::vector<double*> all_blocks;
-  problem.GetParameterBlocks(&all_blocks);
+  const std::vector<double*> all_blocks = ParameterBlocksInResidualOrder(problem);
   ceres::Problem::EvaluateOptions eval;
   for (double* block : all_blocks) {
     if (calib_set.count(block) || problem.IsParameterBlockConstant(block))

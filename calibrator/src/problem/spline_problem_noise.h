@@ -6,6 +6,7 @@
 
 #include <unordered_set>
 
+#include "../solver/parameter_order.h"
 #include "spline_problem.h"
 
 namespace ctcal {
@@ -55,8 +56,7 @@ std::vector<VarianceComponent> SplineProblem<N, Rep>::NoiseComponents(
   ceres::Problem& P = *problem_;
   ceres::Problem::EvaluateOptions eval;
   eval.num_threads = std::max(1, options_.threads);
-  std::vector<double*> all_blocks;
-  P.GetParameterBlocks(&all_blocks);
+  const std::vector<double*> all_blocks = ParameterBlocksInResidualOrder(P);
   int columns = 0;
   for (double* b : all_blocks) {
     if (P.IsParameterBlockConstant(b))

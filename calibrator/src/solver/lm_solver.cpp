@@ -20,6 +20,7 @@
 
 #include "ctcal/sensors/parallel_for.h"
 #include "normal_equations.h"
+#include "parameter_order.h"
 
 namespace ctcal {
 namespace {
@@ -157,8 +158,7 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
   std::vector<ceres::ResidualBlockId> ids;
   problem_.GetResidualBlocks(&ids);
   std::unordered_map<const double*, int> column_of;
-  std::vector<double*> order;
-  problem_.GetParameterBlocks(&order);
+  const std::vector<double*> order = ParameterBlocksInResidualOrder(problem_);
   // Free blocks that some residual block reads (Ceres' preprocessor drops the others): the
   // nuisance blocks in the problem's order, then the border in the caller's.
   std::unordered_map<const double*, bool> used;
