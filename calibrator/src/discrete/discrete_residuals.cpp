@@ -36,4 +36,14 @@ GyroPreintegration::GyroPreintegration(const std::vector<RawImuSample>& samples,
   sqrt_information_ = llt.matrixL().solve(Eigen::Matrix3d::Identity());
 }
 
+// Defined here, not inline in the header: each camera model's Jet instantiation compiled once.
+ceres::CostFunction* MakeDiscreteCorner(CameraModelType type, const CornerMeasurement& m,
+                                        double stamp, const BaseSource& src, const CornerIndex& c,
+                                        const BlockList& list) {
+  return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
+    using Model = decltype(model);
+    return MakeDynamicAutoDiff(new DiscreteCornerFunctor<Model>{m, stamp, src, c}, list.sizes(), 2);
+  });
+}
+
 }  // namespace ctcal::discrete

@@ -227,14 +227,9 @@ struct DiscreteCornerFunctor {
 };
 
 // Builds the corner's cost function and its block list (`list` must start empty).
-inline ceres::CostFunction* MakeDiscreteCorner(CameraModelType type, const CornerMeasurement& m,
-                                               double stamp, const BaseSource& src,
-                                               const CornerIndex& c, const BlockList& list) {
-  return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
-    using Model = decltype(model);
-    return MakeDynamicAutoDiff(new DiscreteCornerFunctor<Model>{m, stamp, src, c}, list.sizes(), 2);
-  });
-}
+ceres::CostFunction* MakeDiscreteCorner(CameraModelType type, const CornerMeasurement& m,
+                                        double stamp, const BaseSource& src, const CornerIndex& c,
+                                        const BlockList& list);
 
 // --- auxiliary IMU (eq. 38-39, appendix B) -----------------------------------------------------
 // The auxiliary IMU A's samples, integrated on its own clock over [tau_i, tau_j] (the keyframe

@@ -144,16 +144,9 @@ class DiscreteFrameCorners final : public ceres::CostFunction {
 };
 
 // The frame block for the camera model `type`; `list` holds the pose blocks then the intrinsics.
-inline ceres::CostFunction* MakeDiscreteFrameCorners(CameraModelType type,
-                                                     std::vector<CornerMeasurement> corners,
-                                                     double stamp, const BaseSource& src,
-                                                     const FramePoseIndex& c, const BlockList& list,
-                                                     double huber_threshold) {
-  return VisitCameraModel(type, [&](auto model) -> ceres::CostFunction* {
-    using Model = decltype(model);
-    return new DiscreteFrameCorners<Model>(std::move(corners), stamp, src, c, list,
-                                           huber_threshold);
-  });
-}
+ceres::CostFunction* MakeDiscreteFrameCorners(CameraModelType type,
+                                              std::vector<CornerMeasurement> corners, double stamp,
+                                              const BaseSource& src, const FramePoseIndex& c,
+                                              const BlockList& list, double huber_threshold);
 
 }  // namespace ctcal::discrete

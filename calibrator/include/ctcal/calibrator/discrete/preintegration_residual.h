@@ -64,10 +64,8 @@ class PreintegrationFactor {
     return true;
   }
 
-  static ceres::CostFunction* Create(std::shared_ptr<const Preintegration> pre) {
-    return new ceres::AutoDiffCostFunction<PreintegrationFactor, 9, 4, 3, 3, 3, 3, 4, 3, 3, 3>(
-        new PreintegrationFactor(std::move(pre)));
-  }
+  // Defined in preintegration_residual.cpp (the Jet instantiation compiled once).
+  static ceres::CostFunction* Create(std::shared_ptr<const Preintegration> pre);
 
  private:
   std::shared_ptr<const Preintegration> pre_;
@@ -131,16 +129,10 @@ class ReintegrationFactor {
     return sizes;
   }
 
-  // One Jet pass over every block (the reference of CreateSplit).
+  // One Jet pass over every block (the reference of CreateSplit); defined in
+  // preintegration_residual.cpp.
   static ceres::CostFunction* Create(std::shared_ptr<const Preintegration> pre,
-                                     const ImuIntrinsics& intrinsics) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<ReintegrationFactor, kStride>(
-        new ReintegrationFactor(std::move(pre), intrinsics));
-    for (const int size : BlockSizes(intrinsics))
-      cost->AddParameterBlock(size);
-    cost->SetNumResiduals(9);
-    return cost;
-  }
+                                     const ImuIntrinsics& intrinsics);
 
   // The same residual, the re-integration differentiated only with respect to the biases and
   // intrinsics (split_integration.h).
