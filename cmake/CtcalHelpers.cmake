@@ -1,7 +1,12 @@
 # Warning flags for ctcal's own targets (never applied to third-party headers, which are SYSTEM).
 function(ctcal_warnings target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
-                                           -Wno-unused-parameter)
+  # -Wshadow=local is GCC's (clang has no such option: with -Werror it would be an error there).
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
+                                             -Wno-unused-parameter)
+  else()
+    target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wno-unused-parameter)
+  endif()
   if(CTCAL_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()

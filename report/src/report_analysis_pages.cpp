@@ -271,7 +271,10 @@ Section Builder::ConfigSection() {
     rows.push_back({"solver.final_cost", FormatNumber(rig_.solver->final_cost, 6)});
     rows.push_back({"solver.seconds", FormatNumber(rig_.solver->seconds, 4)});
   }
-  for (const auto& [name, r] : rig_.residuals) {
+  for (const auto& residual : rig_.residuals) {
+    // Not a structured binding: C++17 lambdas cannot capture one (GCC allows it, clang refuses).
+    const std::string& name = residual.first;
+    const auto& r = residual.second;
     auto add = [&](const char* what, const std::optional<double>& x) {
       if (x)
         rows.push_back({"residuals." + name + "." + what, FormatNumber(*x, 4)});

@@ -30,9 +30,6 @@ const char* const kGroundTruthHeader =
 const char* const kGyroBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z";
 const char* const kImuBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z,ba_x,ba_y,ba_z";
 
-constexpr double kMaxRate = 1e3;           // rad/s
-constexpr double kMaxSpecificForce = 1e4;  // m/s^2
-
 std::string Trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t");
   if (b == std::string::npos)
