@@ -69,16 +69,19 @@ TEST(CalibrateVerdict, OneAxisYawExitsThreeNamingObservability) {
             std::string::npos);
 }
 
-// Disabled: exit 3 and the whitened checks fail, but the pixel RMS check only warns: the outlier
-// rejection keeps the raw RMS at 1.05 / 0.84 px here (1.3 / 1.6 px with cam1 20 cm off), under
-// the check's fail line of 2 px (report/verdict.h), and the camera-only path has no --noise
-// estimate under which the pixel RMS would be the only check left: decide the threshold, then
-// enable.
-TEST(CalibrateVerdict, DISABLED_GeometricFailureExitsThreeNamingPixelRms) {
+// A geometric failure: cam1 held turned 10 degrees about its optical axis (no intrinsic absorbs a
+// roll), so every corner misfits by pixels: 2.5 / 2.8 px RMS on 0.1 px corners, over the pixel RMS
+// check's fail line of 2 px (report/verdict.h). (A held 4 cm offset is not one: the outlier
+// rejection keeps its RMS at 1.05 / 0.84 px, which the whitened checks fail but the pixel RMS
+// check only warns about.)
+TEST(CalibrateVerdict, GeometricFailureExitsThreeNamingPixelRms) {
   test::SymmetricStereo s = test::MakeSymmetricStereo(3, 16, 0.0);
   SensorConfig& cam1 = *s.rig.Find("cam1");
   cam1.T_B_S = s.truth.Find("cam1")->T_B_S;
-  cam1.T_B_S(0, 3) += 0.04;  // held: 4 cm off
+  // held: turned 10 degrees about its optical axis, which no intrinsic can absorb
+  cam1.T_B_S.topLeftCorner<3, 3>() =
+      cam1.T_B_S.topLeftCorner<3, 3>() *
+      Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   cam1.estimate.erase(EstimateItem::kExtrinsics);
   const std::string data = WriteRecording("geometry", s.rig, s.data);
   const test::CliRun r = Calibrate("geometry", data + "/rig.yaml", data);
