@@ -41,7 +41,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -70,7 +69,6 @@ namespace fs = std::filesystem;
 
 constexpr double kGroupConfidence = 0.995;  // per sensor group (Bonferroni)
 constexpr double kPooledConfidence = 0.95;  // the joint NEES over every parameter
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct Settings {
   sim::Scenario scenario = sim::Scenario::kFull;

@@ -46,7 +46,10 @@ std::string CreateError(const RigFields& f, Eigen::Vector2i resolution = {640, 4
 }
 
 TEST(CameraModelFactory, CreatesEveryModelOfTheSpec) {
-  for (const auto& [type, f] : ValidFields()) {
+  for (const auto& entry : ValidFields()) {
+    // Not a structured binding: the lambda below reads f (C++17 cannot capture a binding).
+    const CameraModelType type = entry.first;
+    const auto& f = entry.second;
     const CameraModel cam = CameraModel::Create(f.camera_model, f.intrinsics, f.distortion_model,
                                                 f.distortion_coeffs, Eigen::Vector2i(640, 480));
     EXPECT_EQ(cam.type(), type);
@@ -137,7 +140,10 @@ TEST(CameraModelFactory, ParametersOutsideTheDomainAreClearErrors) {
 // Jacobians and unprojections.
 TEST(CameraModel, RuntimeDispatchEqualsModelStructs) {
   const Eigen::Vector3d p_C(0.3, -0.2, 1.7);
-  for (const auto& [type, f] : ValidFields()) {
+  for (const auto& entry : ValidFields()) {
+    // Not a structured binding: the lambda below reads f (C++17 cannot capture a binding).
+    const CameraModelType type = entry.first;
+    const auto& f = entry.second;
     const CameraModel cam = CameraModel::Create(f.camera_model, f.intrinsics, f.distortion_model,
                                                 f.distortion_coeffs, Eigen::Vector2i(640, 480));
     Eigen::Vector2d uv;
