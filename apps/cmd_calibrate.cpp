@@ -428,6 +428,12 @@ int RunCalibrate(int argc, char** argv) {
            {"config.max_iterations", std::to_string(options.max_iterations)}})
     run_info.emplace_back(key, value);
 
+  // The noise estimation is part of the spline method only (the discrete calibrator turns it
+  // off): say so instead of ignoring the option.
+  if (options.estimate_noise && (rig.IsCameraOnly() || method != "spline"))
+    log(std::string("note: --noise estimate is not supported ") +
+        (rig.IsCameraOnly() ? "for a rig without IMUs" : "by the discrete method") +
+        ": the stated noise weighs its residuals (docs/noise_estimation.md)");
   if (rig.IsCameraOnly()) {
     log("cross-validation not run: it is part of the visual-inertial calibration (--method "
         "spline)");

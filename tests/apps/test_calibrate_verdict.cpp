@@ -90,6 +90,18 @@ TEST(CalibrateVerdict, GeometricFailureExitsThreeNamingPixelRms) {
   EXPECT_NE(r.err.find("check failed: cam"), std::string::npos) << r.err;
 }
 
+// --noise estimate belongs to the spline method: a camera-only run says that it does not apply
+// (before: silently ignored) and calibrates with the stated pixel_sigma.
+TEST(CalibrateVerdict, NoiseEstimateOnACameraOnlyRigIsNamedAsNotSupported) {
+  const test::SymmetricStereo s = test::MakeSymmetricStereo(3, 16, 0.0);
+  const std::string data = WriteRecording("noise_note", s.rig, s.data);
+  const test::CliRun r = Calibrate("noise_note", data + "/rig.yaml", data, " --noise estimate");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: --noise estimate is not supported for a rig without IMUs"),
+            std::string::npos)
+      << r.out;
+}
+
 // Issue 21's case: 4x6 inner corners (5x7 squares, 30 mm), two 640x480 radtan cameras 120 mm
 // apart, every view's order turned by half at random: the stereo pose within 0.3 deg and 2 mm,
 // focal lengths within 4 px, exit 0.
