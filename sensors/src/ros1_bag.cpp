@@ -89,6 +89,20 @@ void CheckRecordLengths(const std::string& path) {
     if (!in.read(&header[0], static_cast<std::streamsize>(header_len)))
       throw damaged("a header", at, header_len);
     pos += header_len;
+    // The library's ros::Header::parse trusts each field's length and copies that many bytes
+    // (fuzzing: a chunk header whose field declared 2399 bytes read past its 60-byte header).
+    for (std::size_t i = 0; i < header.size();) {
+      const auto* b = reinterpret_cast<const unsigned char*>(header.data() + i);
+      const std::uint64_t len = header.size() - i < 4 ? header.size()
+                                                      : b[0] | b[1] << 8 | b[2] << 16 |
+                                                            static_cast<std::uint64_t>(b[3]) << 24;
+      if (header.size() - i < 4 || len > header.size() - i - 4)
+        throw std::runtime_error(path + ": the record at byte " + std::to_string(at) +
+                                 " has a header field of " + std::to_string(len) +
+                                 " bytes past its header's end (" + std::to_string(header_len) +
+                                 " bytes): a damaged bag");
+      i += 4 + static_cast<std::size_t>(len);
+    }
     std::uint64_t target = 0;
     if (field_u64(header, "index_pos", &target) || field_u64(header, "chunk_pos", &target))
       targets.emplace_back(at, target);

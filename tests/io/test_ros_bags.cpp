@@ -316,6 +316,26 @@ TEST(RosBags, RecordLengthsPastTheFileEndAreRefusedBeforeAnyAllocation) {
   EXPECT_THAT(error, HasSubstr("a damaged or cut bag"));
 }
 
+// Fuzzing finding (session 10, fuzz_ros1_bag): a chunk header whose field declares more bytes than
+// its header holds made librosbag_storage's ros::Header::parse read past the buffer
+// (AddressSanitizer heap-buffer-overflow in Bag::open -> readChunkHeader). Refused before
+// Bag::open, naming the record.
+TEST(RosBags, HeaderFieldsPastTheirHeaderAreRefusedBeforeTheLibraryParsesThem) {
+  const std::string input =
+      std::string(CTCAL_SOURCE_DIR) + "/tests/data/fuzz/ros1_bag_header_field_past_header.bag";
+  std::ifstream in(input, std::ios::binary);
+  ASSERT_TRUE(in) << input;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  const std::string bag = Out("field_past_header.bag").string();
+  std::ofstream(bag, std::ios::binary)
+      .write(bytes.data() + 1, static_cast<std::streamsize>(bytes.size() - 1));
+  const std::string error = LoadError(bag);
+  EXPECT_THAT(error, HasSubstr(bag + ": the record at byte "));
+  EXPECT_THAT(error, HasSubstr("bytes past its header's end"));
+  EXPECT_THAT(error, HasSubstr("a damaged bag"));
+}
+
 TEST(RosBags, Mcap2StorageIsRefusedByName) {
   REQUIRE_PYTHON_ROSBAG();
   const std::string bag = Out("mcap").string();
