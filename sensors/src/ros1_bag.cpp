@@ -51,27 +51,6 @@ void CheckRecordLengths(const std::string& path) {
                               what + " of " + std::to_string(length) + " bytes, past the file's " +
                               "end (" + std::to_string(size) + " bytes): a damaged or cut bag");
   };
-  // A header field `name=value` read as a little-endian uint64 (index_pos, chunk_pos).
-  const auto field_u64 = [](const std::string& header, const std::string& name,
-                            std::uint64_t* value) {
-    for (std::size_t i = 0; i + 4 <= header.size();) {
-      const auto* b = reinterpret_cast<const unsigned char*>(header.data() + i);
-      const std::uint64_t len =
-          b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint64_t>(b[3]) << 24;
-      i += 4;
-      if (len > header.size() - i)
-        return false;
-      const std::string f = header.substr(i, static_cast<std::size_t>(len));
-      i += static_cast<std::size_t>(len);
-      if (f.size() == name.size() + 1 + 8 && f.compare(0, name.size() + 1, name + "=") == 0) {
-        *value = 0;
-        for (int k = 7; k >= 0; --k)
-          *value = *value << 8 | static_cast<unsigned char>(f[name.size() + 1 + k]);
-        return true;
-      }
-    }
-    return false;
-  };
   // Where the library will seek to: the bag header's index_pos and each chunk info's chunk_pos
   // must be the start of a record, or it reads a length from the middle of one.
   std::set<std::uint64_t> starts;
@@ -89,8 +68,10 @@ void CheckRecordLengths(const std::string& path) {
     if (!in.read(&header[0], static_cast<std::streamsize>(header_len)))
       throw damaged("a header", at, header_len);
     pos += header_len;
-    // The library's ros::Header::parse trusts each field's length and copies that many bytes
-    // (fuzzing: a chunk header whose field declared 2399 bytes read past its 60-byte header).
+    // Each header field: a little-endian uint32 length, then `name=value`. The library's
+    // ros::Header::parse trusts the lengths and copies that many bytes (fuzzing: a chunk header
+    // field declaring 2399 bytes in a shorter header read past its buffer): checked here. The
+    // fields index_pos and chunk_pos (uint64) are where the library will seek to.
     for (std::size_t i = 0; i < header.size();) {
       const auto* b = reinterpret_cast<const unsigned char*>(header.data() + i);
       const std::uint64_t len = header.size() - i < 4 ? header.size()
@@ -101,11 +82,17 @@ void CheckRecordLengths(const std::string& path) {
                                  " has a header field of " + std::to_string(len) +
                                  " bytes past its header's end (" + std::to_string(header_len) +
                                  " bytes): a damaged bag");
+      const std::string field = header.substr(i + 4, static_cast<std::size_t>(len));
       i += 4 + static_cast<std::size_t>(len);
+      for (const std::string name : {"index_pos=", "chunk_pos="}) {
+        if (field.size() == name.size() + 8 && field.compare(0, name.size(), name) == 0) {
+          std::uint64_t target = 0;
+          for (int k = 7; k >= 0; --k)
+            target = target << 8 | static_cast<unsigned char>(field[name.size() + k]);
+          targets.emplace_back(at, target);
+        }
+      }
     }
-    std::uint64_t target = 0;
-    if (field_u64(header, "index_pos", &target) || field_u64(header, "chunk_pos", &target))
-      targets.emplace_back(at, target);
     if (size - pos < 4 || !read_u32(&data_len))
       throw damaged("a data length field", at, 4);
     if (data_len > size - pos)

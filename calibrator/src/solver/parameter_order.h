@@ -8,7 +8,8 @@
 namespace ctcal {
 
 // The problem's parameter blocks in the order the residual blocks first read them (residual
-// blocks in insertion order), then the blocks no residual block reads, in the problem's order.
+// blocks in insertion order), then the blocks no residual block reads (in Ceres' order: they add
+// no entry to the normal equations, so their place cannot change a sum).
 //
 // Why not ceres::Problem::GetParameterBlocks: it lists the blocks by their memory address (Ceres
 // keeps them in a map keyed by the pointer), which differs from run to run with the heap's layout.
