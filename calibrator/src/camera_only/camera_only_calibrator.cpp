@@ -22,6 +22,7 @@
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/calibrator/marginal_covariance.h"
 #include "ctcal/calibrator/report_data_builder.h"
+#include "ctcal/calibrator/residuals/mrcal_regularization.h"
 #include "ctcal/report/stage_time.h"
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sensors/mrcal_lens.h"

@@ -40,6 +40,7 @@ using residual_internal::Jacobian;
 #include "ctcal/calibrator/residuals/inertial_block_residual.h"
 #include "ctcal/calibrator/residuals/inertial_row_groups.h"
 #include "ctcal/calibrator/residuals/mrcal_corner_residual.h"
+#include "ctcal/calibrator/residuals/mrcal_regularization.h"
 #include "ctcal/calibrator/residuals/residuals.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/calibrator/spline_init.h"
@@ -306,6 +307,11 @@ class SplineProblem {
 
   // Marks the corners whose whitened residual norm^2 exceeds the chi-square(2) gate.
   void RemoveOutliers(double probability, std::vector<CameraOutliers>* report);
+  // The noise estimation's (spline_problem_noise.h): every corner back in the problem (the next
+  // RemoveOutliers gates them all at the current weights), and per camera the robust variance
+  // factor of its corners at the current values, median |e|^2 / (2 ln 2).
+  void RestoreCorners();
+  std::vector<double> RobustCornerFactors();
 
   // How many residuals the current time offsets have moved out of their segment by more than
   // kRebucketTolerance of a knot interval. A residual just past its segment's end evaluates that
@@ -444,6 +450,7 @@ class SplineProblem {
   void AddCameraFrames(PreparedCamera* cam, bool robust);
 
   void AddCamera(PreparedCamera* cam, bool robust);
+  void AddLensRegularization(const PreparedCamera& cam);
 
   // A sensor's samples as functors of their residual class R, with each sample's trajectory and
   // bias segment; `blocks(seg, bseg)` lists a sample's parameter blocks (R::Blocks) and `sizes`

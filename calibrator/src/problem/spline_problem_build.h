@@ -181,6 +181,24 @@ void SplineProblem<N, Rep>::AddCamera(PreparedCamera* cam, bool robust) {
     camera_ids_.back().push_back(
         problem_->AddResidualBlock(cost, loss, CornerResidual<N, Rep>::Blocks(p)));
   }
+  AddLensRegularization(*cam);
+}
+
+// mrcal's regularisation of an mrcal lens (residuals/mrcal_regularization.h), as in the
+// camera-only problem: a data term of its own (not a prior on the rig file's values), scaled to
+// the camera's corners, so the covariance keeps it.
+template <int N, Se3Representation Rep>
+void SplineProblem<N, Rep>::AddLensRegularization(const PreparedCamera& cam) {
+  SensorState& s = *cam.state;
+  const MrcalLens* lens = s.camera->mrcal_lens();
+  if (lens == nullptr || !s.config.Estimates(EstimateItem::kIntrinsics))
+    return;
+  const double measurements =
+      2.0 * static_cast<double>(std::count(cam.removed.begin(), cam.removed.end(), false));
+  auto cost = std::make_unique<MrcalRegularizationCost>(
+      lens->MakeRegularization(s.camera->resolution(), measurements));
+  if (cost->NumTerms() > 0)
+    problem_->AddResidualBlock(cost.release(), nullptr, s.camera->mutable_params());
 }
 
 template <int N, Se3Representation Rep>

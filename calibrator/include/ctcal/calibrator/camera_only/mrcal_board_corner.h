@@ -1,5 +1,5 @@
-// The camera-only corner residual for an mrcal lens (camera_model mrcal), and mrcal's
-// regularisation of its parameters (MrcalLens::MakeRegularization).
+// The camera-only corner residual for an mrcal lens (camera_model mrcal); mrcal's regularisation
+// of its parameters is residuals/mrcal_regularization.h.
 //
 // Residual (the same as the fixed models' BoardCornerResidual, camera_only_calibrator.cpp):
 //   p_C = BoardPointInCamera(p_W, T_W_B, T_B_C),   r = (pi(theta, p_C) - uv) / sigma.
@@ -88,38 +88,6 @@ class MrcalBoardCornerCost final : public ceres::CostFunction {
   Eigen::Vector3d p_W_;
   Eigen::Vector2d uv_;
   double inv_sigma_;
-};
-
-// r_i = w_i (theta_i - target_i) for the regularised parameters (w_i > 0), whitened like the
-// corners (MrcalLens::MakeRegularization chooses w for that scale).
-class MrcalRegularizationCost final : public ceres::CostFunction {
- public:
-  explicit MrcalRegularizationCost(MrcalLens::Regularization reg) : reg_(std::move(reg)) {
-    for (Eigen::Index i = 0; i < reg_.weight.size(); ++i)
-      if (reg_.weight(i) > 0.0)
-        index_.push_back(static_cast<int>(i));
-    set_num_residuals(static_cast<int>(index_.size()));
-    *mutable_parameter_block_sizes() = {static_cast<int>(reg_.weight.size())};
-  }
-  int NumTerms() const { return static_cast<int>(index_.size()); }
-
-  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
-    const auto n = static_cast<Eigen::Index>(reg_.weight.size());
-    for (std::size_t k = 0; k < index_.size(); ++k)
-      residuals[k] = reg_.weight(index_[k]) * (p[0][index_[k]] - reg_.target(index_[k]));
-    if (jacobians && jacobians[0]) {
-      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
-          jacobians[0], static_cast<Eigen::Index>(index_.size()), n);
-      J.setZero();
-      for (std::size_t k = 0; k < index_.size(); ++k)
-        J(static_cast<Eigen::Index>(k), index_[k]) = reg_.weight(index_[k]);
-    }
-    return true;
-  }
-
- private:
-  MrcalLens::Regularization reg_;
-  std::vector<int> index_;
 };
 
 }  // namespace ctcal
