@@ -45,8 +45,8 @@ namespace {
 // a format cannot hold is logged, one line each.
 void SaveFilesForOtherPrograms(const RigConfig& rig, const std::string& dir,
                                const CalibrationLog& log) {
-  SaveKalibrFiles(rig, dir);
   std::vector<std::string> notes;
+  SaveKalibrFiles(rig, dir, {}, &notes);
   SaveEcosystemExports(rig, dir, &notes);
   for (const std::string& note : notes)
     log("exports: " + note);

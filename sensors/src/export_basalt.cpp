@@ -14,7 +14,7 @@ namespace ctcal {
 namespace {
 
 using internal::ImuIntrinsicsOf;
-using internal::KalibrCameras;
+using internal::KalibrCameraModels;
 
 // M = R L with R a rotation and L lower-triangular with a positive diagonal (M invertible, det >
 // 0). With J the reversal permutation, J M J = (J R J)(J L J) is a QR decomposition (J L J is
@@ -105,7 +105,7 @@ void Vector3Json(std::ostringstream& out, double x) {
 
 std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::string* why,
                                                  std::vector<std::string>* notes) {
-  const std::vector<const SensorConfig*> cams = KalibrCameras(rig);
+  const std::vector<SensorConfig> cams = KalibrCameraModels(rig, "calibration.json", notes);
   // basalt's IMU frame i (see the header): R_i_I and the calibrated matrices.
   Eigen::Matrix3d R_I_i = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d L = Eigen::Matrix3d::Identity(), G = Eigen::Matrix3d::Identity();
@@ -123,10 +123,10 @@ std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::stri
   std::ostringstream cams_out;
   for (std::size_t n = 0; n < cams.size(); ++n) {
     cams_out << (n ? ",\n      " : "");
-    if (!BasaltCamera(*cams[n], cams_out)) {
+    if (!BasaltCamera(cams[n], cams_out)) {
       if (why)
-        *why = "basalt has no " + cams[n]->camera_model + "-" + cams[n]->distortion_model +
-               " camera (" + cams[n]->name + ")";
+        *why = "basalt has no " + cams[n].camera_model + "-" + cams[n].distortion_model +
+               " camera (" + cams[n].name + ")";
       return std::nullopt;
     }
   }
@@ -134,8 +134,8 @@ std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::stri
   out << "{\n  \"value0\": {\n    \"T_imu_cam\": [\n";
   for (std::size_t n = 0; n < cams.size(); ++n) {
     // T_i_C = R_i_I T_B_C (B = I of the base IMU; for a camera-only rig, the reference camera).
-    const Eigen::Matrix3d R = R_I_i.transpose() * cams[n]->T_B_S.topLeftCorner<3, 3>();
-    const Eigen::Vector3d p = R_I_i.transpose() * cams[n]->T_B_S.topRightCorner<3, 1>();
+    const Eigen::Matrix3d R = R_I_i.transpose() * cams[n].T_B_S.topLeftCorner<3, 3>();
+    const Eigen::Vector3d p = R_I_i.transpose() * cams[n].T_B_S.topRightCorner<3, 1>();
     const Eigen::Quaterniond q(R);
     out << "      {\"px\": " << Num(p.x()) << ", \"py\": " << Num(p.y())
         << ", \"pz\": " << Num(p.z()) << ", \"qx\": " << Num(q.x()) << ", \"qy\": " << Num(q.y())
@@ -145,7 +145,7 @@ std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::stri
   out << "    ],\n    \"intrinsics\": [\n      " << cams_out.str() << "\n    ],\n";
   out << "    \"resolution\": [";
   for (std::size_t n = 0; n < cams.size(); ++n)
-    out << (n ? ", " : "") << "[" << cams[n]->width << ", " << cams[n]->height << "]";
+    out << (n ? ", " : "") << "[" << cams[n].width << ", " << cams[n].height << "]";
   out << "],\n";
   // Biases are states of the trajectory (basalt estimates its own); the static part is 0.
   const Eigen::Matrix3d S_a = L - Eigen::Matrix3d::Identity();
@@ -167,13 +167,13 @@ std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::stri
   Vector3Json(out, noise.accelerometer_random_walk);
   out << ",\n    \"gyro_bias_std\": ";
   Vector3Json(out, noise.gyroscope_random_walk);
-  const double offset = rig.IsCameraOnly() || cams.empty() ? 0.0 : cams[0]->time_offset;
-  for (const SensorConfig* c : cams) {
-    if (notes && !rig.IsCameraOnly() && std::abs(c->time_offset - offset) > 1e-6) {
+  const double offset = rig.IsCameraOnly() || cams.empty() ? 0.0 : cams[0].time_offset;
+  for (const SensorConfig& c : cams) {
+    if (notes && !rig.IsCameraOnly() && std::abs(c.time_offset - offset) > 1e-6) {
       char ms[32];
-      std::snprintf(ms, sizeof ms, "%+.3f ms", (c->time_offset - offset) * 1e3);
-      notes->push_back("calibration.json: basalt has one camera time offset: " + cams[0]->name +
-                       "'s is written, " + c->name + "'s differs by " + ms);
+      std::snprintf(ms, sizeof ms, "%+.3f ms", (c.time_offset - offset) * 1e3);
+      notes->push_back("calibration.json: basalt has one camera time offset: " + cams[0].name +
+                       "'s is written, " + c.name + "'s differs by " + ms);
     }
   }
   out << ",\n    \"cam_time_offset_ns\": " << static_cast<std::int64_t>(std::llround(offset * 1e9))

@@ -7,9 +7,11 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ctcal/sensors/imu_intrinsics.h"
+#include "ctcal/sensors/kalibr_camera.h"
 #include "ctcal/sensors/number_format.h"
 #include "ctcal/sensors/rig.h"
 
@@ -39,6 +41,20 @@ inline std::vector<const SensorConfig*> KalibrCameras(const RigConfig& rig) {
       cams.push_back(&s);
   }
   return cams;
+}
+
+// KalibrCameras as the other programs' files can hold them (kalibr_camera.h): an mrcal lens as
+// pinhole-radtan. `notes` (may be null) gets one line per fitted lens, naming `file`.
+inline std::vector<SensorConfig> KalibrCameraModels(const RigConfig& rig, const std::string& file,
+                                                    std::vector<std::string>* notes) {
+  std::vector<SensorConfig> out;
+  for (const SensorConfig* c : KalibrCameras(rig)) {
+    KalibrCamera k = AsKalibrCamera(*c);
+    if (notes && !k.exact)
+      notes->push_back(KalibrCameraNote(file, k));
+    out.push_back(std::move(k.camera));
+  }
+  return out;
 }
 
 template <typename Derived>

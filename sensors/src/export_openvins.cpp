@@ -18,7 +18,7 @@ namespace {
 using internal::EmitMatrix;
 using internal::EmitNumbers;
 using internal::ImuIntrinsicsOf;
-using internal::KalibrCameras;
+using internal::KalibrCameraModels;
 
 // M = R U with R a rotation and U upper-triangular with a positive diagonal (M invertible, det >
 // 0): Householder QR with the signs fixed.
@@ -47,17 +47,18 @@ void Save(const std::string& text, const std::string& path) {
 
 }  // namespace
 
-std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::string* why) {
+std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::string* why,
+                                                   std::vector<std::string>* notes) {
   if (rig.IsCameraOnly()) {
     if (why)
       *why = "OpenVINS needs an IMU (this rig is camera-only)";
     return std::nullopt;
   }
-  const std::vector<const SensorConfig*> cams = KalibrCameras(rig);
+  const std::vector<SensorConfig> cams = KalibrCameraModels(rig, "kalibr_imucam_chain.yaml", notes);
   YAML::Emitter out;
   out << YAML::BeginMap;
   for (std::size_t n = 0; n < cams.size(); ++n) {
-    const SensorConfig& c = *cams[n];
+    const SensorConfig& c = cams[n];
     std::string distortion = c.distortion_model;
     std::vector<double> coeffs = c.distortion_coeffs;
     if (c.camera_model != "pinhole" || distortion == "none") {
@@ -167,7 +168,7 @@ std::vector<std::string> SaveEcosystemExports(const RigConfig& rig, const std::s
         notes->push_back("calibration.json: basalt has one IMU: " + s.name + " is left out");
     }
   }
-  save(EmitOpenVinsImucamChain(rig, &why), "kalibr_imucam_chain.yaml");
+  save(EmitOpenVinsImucamChain(rig, &why, notes), "kalibr_imucam_chain.yaml");
   save(EmitOpenVinsImuChain(rig, &why, notes), "kalibr_imu_chain.yaml");
   for (const std::string& path : SaveMrcalCameraModels(rig, dir, notes))
     written.push_back(path);

@@ -21,7 +21,7 @@ using internal::EmitMatrix;
 using internal::EmitNumbers;
 using internal::ImuIntrinsicsOf;
 using internal::Inverse;
-using internal::KalibrCameras;
+using internal::KalibrCameraModels;
 
 // Kalibr's model of an IMU, written in our frame I. SPEC fixes the files' IMU frame to ours
 // (`T_cam_imu = inverse(T_B_C)`), while Kalibr's canonical form (lower-triangular M's) lives in
@@ -61,13 +61,15 @@ void Save(const std::string& text, const std::string& path) {
 }  // namespace
 
 std::string EmitKalibrCamchain(const RigConfig& rig,
-                               const std::vector<std::vector<int>>& cam_overlaps) {
-  const std::vector<const SensorConfig*> cams = KalibrCameras(rig);
+                               const std::vector<std::vector<int>>& cam_overlaps,
+                               std::vector<std::string>* notes) {
+  const std::vector<SensorConfig> cams =
+      KalibrCameraModels(rig, rig.IsCameraOnly() ? "camchain.yaml" : "camchain-imucam.yaml", notes);
   const bool camera_only = rig.IsCameraOnly();
   YAML::Emitter out;
   out << YAML::BeginMap;
   for (std::size_t n = 0; n < cams.size(); ++n) {
-    const SensorConfig& c = *cams[n];
+    const SensorConfig& c = cams[n];
     out << YAML::Key << "cam" + std::to_string(n) << YAML::Value << YAML::BeginMap;
     if (!camera_only) {
       out << YAML::Key << "T_cam_imu" << YAML::Value;
@@ -75,7 +77,7 @@ std::string EmitKalibrCamchain(const RigConfig& rig,
     }
     if (n > 0) {
       out << YAML::Key << "T_cn_cnm1" << YAML::Value;
-      EmitMatrix(out, Inverse(c.T_B_S) * cams[n - 1]->T_B_S);
+      EmitMatrix(out, Inverse(c.T_B_S) * cams[n - 1].T_B_S);
     }
     out << YAML::Key << "cam_overlaps" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     if (n < cam_overlaps.size()) {
@@ -156,13 +158,14 @@ std::string EmitKalibrImu(const RigConfig& rig) {
 }
 
 std::vector<std::string> SaveKalibrFiles(const RigConfig& rig, const std::string& dir,
-                                         const std::vector<std::vector<int>>& cam_overlaps) {
+                                         const std::vector<std::vector<int>>& cam_overlaps,
+                                         std::vector<std::string>* notes) {
   namespace fs = std::filesystem;
   std::vector<std::string> written;
   const bool camera_only = rig.IsCameraOnly();
   const std::string camchain =
       (fs::path(dir) / (camera_only ? "camchain.yaml" : "camchain-imucam.yaml")).string();
-  Save(EmitKalibrCamchain(rig, cam_overlaps), camchain);
+  Save(EmitKalibrCamchain(rig, cam_overlaps, notes), camchain);
   written.push_back(camchain);
   if (!camera_only) {
     const std::string imu = (fs::path(dir) / "imu.yaml").string();

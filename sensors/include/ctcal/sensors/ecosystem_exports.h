@@ -40,7 +40,8 @@ namespace ctcal {
 // `notes` (may be null) receives one line per part left out.
 std::optional<std::string> EmitBasaltCalibration(const RigConfig& rig, std::string* why,
                                                  std::vector<std::string>* notes = nullptr);
-std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::string* why);
+std::optional<std::string> EmitOpenVinsImucamChain(const RigConfig& rig, std::string* why,
+                                                   std::vector<std::string>* notes = nullptr);
 std::optional<std::string> EmitOpenVinsImuChain(const RigConfig& rig, std::string* why,
                                                 std::vector<std::string>* notes = nullptr);
 

@@ -30,13 +30,17 @@ namespace ctcal {
 
 // `cam_overlaps[n]`: the Kalibr indices of the cameras whose views overlap camera n's; empty:
 // every other camera (Kalibr computes it from shared target views, which a rig file lacks).
+// An mrcal camera is written as its pinhole-radtan stand-in (kalibr_camera.h); `notes` (may be
+// null) gets one line per fitted lens.
 std::string EmitKalibrCamchain(const RigConfig& rig,
-                               const std::vector<std::vector<int>>& cam_overlaps = {});
+                               const std::vector<std::vector<int>>& cam_overlaps = {},
+                               std::vector<std::string>* notes = nullptr);
 std::string EmitKalibrImu(const RigConfig& rig);
 // Writes camchain-imucam.yaml and imu.yaml (rig with IMUs) or camchain.yaml (camera-only) into
 // `dir`; returns the paths written.
 std::vector<std::string> SaveKalibrFiles(const RigConfig& rig, const std::string& dir,
-                                         const std::vector<std::vector<int>>& cam_overlaps = {});
+                                         const std::vector<std::vector<int>>& cam_overlaps = {},
+                                         std::vector<std::string>* notes = nullptr);
 
 // The sensors of Kalibr files, as an initial guess. Cameras are named as in the file (cam0, ...);
 // IMUs imu0 (Kalibr's reference), imu1, ... Kalibr's single-IMU input file (keys at the top
