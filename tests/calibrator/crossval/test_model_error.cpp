@@ -48,6 +48,31 @@ TEST(ModelError, InflatesOnlyTheFailedGroupByItsSubsetsVariance) {
   EXPECT_EQ(back.Find("cam0")->sigma_formal, cam.sigma_formal);
 }
 
+// Nested (a subset against the full calibration F): a parameter whose subset variance is below
+// 1.2 times F's has no z of its own, yet it is in the failing group and gets the same model error
+// mu = lambda s_k^2 (on EuRoC, cam1's k2 was such a parameter and the worst of the comparison).
+TEST(ModelError, AParameterWithoutAZIsWidenedWithItsFailingGroup) {
+  const RigConfig full = ExampleWithSigma(1.0);
+  RigConfig subset = ExampleWithSigma(2.0);
+  subset.Find("cam0")->intrinsics[0] += 20.0;
+  subset.Find("cam0")->sigma.values.at("distortion_coeffs")[1] = 1.05;  // 1.1 x F's variance
+  const CrossValidation cv = CrossValidateNested(full, {subset}, {"subset 1"});
+  double lambda = 0.0;
+  for (const CrossValGroup& g : cv.groups) {
+    if (g.name == "cam0.intrinsics") {
+      EXPECT_FALSE(g.passed);
+      EXPECT_EQ(g.count, 7);  // the row without a z is not tested
+      lambda = g.model_ratio;
+    }
+  }
+  ASSERT_GT(lambda, 1.0);
+  RigConfig reported = full;
+  EXPECT_EQ(ApplyModelError(cv, &reported), 8);
+  const std::vector<double>& d = reported.Find("cam0")->sigma.values.at("distortion_coeffs");
+  EXPECT_NEAR(d[1], std::sqrt(1.0 + lambda * 1.05 * 1.05), 1e-9);
+  EXPECT_NEAR(d[0], std::sqrt(1.0 + lambda * 4.0), 1e-9);
+}
+
 TEST(ModelError, SubsetsAreInterleavedBlocksOfCameraFrames) {
   std::vector<std::string> warnings;
   const RigConfig rig = LoadRig(kExample, &warnings);
