@@ -95,6 +95,13 @@ TEST(CrossValidate, PairZGroupTestsAndModelRatio) {
   const std::string json = CrossValidationJson(cv);
   EXPECT_NE(json.find("\"name\": \"cam0.intrinsics\""), std::string::npos);
   EXPECT_NE(json.find("\"passed\": false"), std::string::npos);
+  // The rig's test: every group's statistic on all their dof; here it passes (one group fails).
+  EXPECT_TRUE(cv.summary.rig_passed);
+  EXPECT_NEAR(
+      boost::math::cdf(boost::math::chi_squared(cv.summary.rig_dof), cv.summary.rig_threshold),
+      0.99, 1e-9);
+  EXPECT_NE(json.find("\"rig\": {\"dof\": " + std::to_string(cv.summary.rig_dof)),
+            std::string::npos);
   const std::string text = FormatCrossValidation(cv);
   EXPECT_NE(text.find("cam0.intrinsics[0]"), std::string::npos);
   EXPECT_NE(text.find("FAIL"), std::string::npos);

@@ -75,6 +75,7 @@ TEST(CrossValidation, WithoutModelErrorTheSigmaStaysFormal) {
       }
     }
   }
+  EXPECT_TRUE(o.xv.versus_full.summary.rig_passed);
   EXPECT_LE(worst, 1.10) << "reported sigma / formal";
   const Coverage c = CoverageOf(rec.truth, o.reported);
   std::printf("no model error: reported / formal <= %.3f, %.1f %% within 3 sigma, rms %.2f\n",
@@ -84,9 +85,9 @@ TEST(CrossValidation, WithoutModelErrorTheSigmaStaysFormal) {
   EXPECT_GE(c.rms, 0.75);
 }
 
-// Disabled: first run on the merged main (session 9) fails: the injected per-frame corner shift is
-// not yet covered by the reported sigma; fix the estimator or the injection, then enable.
-TEST(CrossValidation, DISABLED_ModelErrorFailsTheFormalSigmaAndTheReportedOneCoversIt) {
+// (Before the rig's test, only the groups failing their own Bonferroni-limited test were widened:
+// 92.6 % within 3 sigma. A 1-dof group such as a time offset needs r > 11.6 for that.)
+TEST(CrossValidation, ModelErrorFailsTheFormalSigmaAndTheReportedOneCoversIt) {
   SimulatedRecording rec = SimulateTable4(sim::Scenario::kFull, 24.0, 7);
   // Every frame's corners moved by one shift ~ N(0, 0.5 px) per axis: what a frame stamped a few
   // ms off does on a camera moving at ~100 px/s. The stated 1 px per corner is independent
@@ -112,6 +113,12 @@ TEST(CrossValidation, DISABLED_ModelErrorFailsTheFormalSigmaAndTheReportedOneCov
   std::printf("model error: formal %.1f %% within 3 sigma, rms %.2f; reported %.1f %%, rms %.2f\n",
               100.0 * formal.within_3, formal.rms, 100.0 * reported.within_3, reported.rms);
   EXPECT_FALSE(o.xv.versus_full.summary.passed);
+  EXPECT_FALSE(o.xv.versus_full.summary.rig_passed);
+  // Every group gets its own model error once the rig fails, also one that passed alone.
+  int widened_passing = 0;
+  for (const CrossValGroup& g : o.xv.versus_full.groups)
+    widened_passing += g.passed && g.model_ratio > 0.0;
+  EXPECT_GT(widened_passing, 0);
   EXPECT_LT(formal.within_3, 0.9);
   EXPECT_GE(reported.within_3, 0.97);
   EXPECT_LE(reported.rms, 1.5);
