@@ -13,8 +13,8 @@ work=${CTCAL_COST_DIR:-$(mktemp -d /tmp/ctcal_xval_cost.XXXXXX)}
 : >"$work/times.txt"
 for _ in $(seq 1 "$n"); do
   for mode in on off; do
-    extra=()
-    [ "$mode" = off ] && extra=(--no-cross-validate)
+    extra=(--no-cross-validate)
+    [ "$mode" = on ] && extra=(--cross-validate)
     code=0
     /usr/bin/time -f "$mode %e %U %S" -a -o "$work/times.txt" "$ctcal" calibrate \
       --rig "$work/data/rig.yaml" --data "$work/data" --out "$work/out_$mode" "${extra[@]}" \
