@@ -285,6 +285,9 @@ int RunCalibrate(int argc, char** argv) {
       "noise", po::value(&noise_policy)->default_value("stated"),
       "spline: estimate (every sensor's noise from the data, the stated noise the start; "
       "docs/noise_estimation.md) or stated (the rig file's noise weighs everything)")(
+      "frame-weights", po::value(&options.frame_weight_prior)->default_value(10.0),
+      "with --noise estimate: each camera frame's own noise level, shrunk toward the camera's "
+      "by this many pseudo-residuals (0: one level per camera)")(
       "cross-validate", po::bool_switch(),
       "cross-validate between subsets of the recording (docs/cross_validation.md): sigma then "
       "adds the model error the subsets' disagreement shows")(
@@ -328,6 +331,8 @@ int RunCalibrate(int argc, char** argv) {
   if (noise_policy != "estimate" && noise_policy != "stated")
     return cli.UsageError("--noise must be estimate or stated, got " + noise_policy);
   options.estimate_noise = noise_policy == "estimate";
+  if (!(options.frame_weight_prior >= 0.0))
+    return cli.UsageError("--frame-weights must be >= 0");
   // The knot rule by fit belongs to the noise estimation (docs/noise_estimation.md).
   options.knot_spacing_by_fit = options.estimate_noise;
   try {
