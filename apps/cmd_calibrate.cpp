@@ -289,9 +289,10 @@ int RunCalibrate(int argc, char** argv) {
       "with --noise estimate: each camera frame's own noise level, shrunk toward the camera's "
       "by this many pseudo-residuals (0: one level per camera)")(
       "cross-validate", po::bool_switch(),
-      "cross-validate between subsets of the recording (docs/cross_validation.md): sigma then "
-      "adds the model error the subsets' disagreement shows")(
-      "no-cross-validate", po::bool_switch(), "no cross-validation (the default)")(
+      "cross-validate between subsets of the recording (the default where the recording allows; "
+      "docs/cross_validation.md): sigma then adds the model error the subsets' disagreement "
+      "shows")("no-cross-validate", po::bool_switch(),
+               "no cross-validation: sigma is the formal one")(
       "subsets", po::value(&xv_options.subsets)->default_value(2),
       "cross-validation: number of interleaved subsets K >= 2")(
       "subset-block", po::value(&xv_options.block_seconds)->default_value(4.0),
@@ -299,8 +300,9 @@ int RunCalibrate(int argc, char** argv) {
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
   options.analytic = !cli.vm()["autodiff"].as<bool>();
-  xv_options.enabled =
-      cli.vm()["cross-validate"].as<bool>() && !cli.vm()["no-cross-validate"].as<bool>();
+  if (cli.vm()["cross-validate"].as<bool>() && cli.vm()["no-cross-validate"].as<bool>())
+    return cli.UsageError("--cross-validate and --no-cross-validate exclude each other");
+  xv_options.enabled = !cli.vm()["no-cross-validate"].as<bool>();
   if (xv_options.subsets < 2)
     return cli.UsageError("--subsets must be >= 2, got " + std::to_string(xv_options.subsets));
   if (!(xv_options.block_seconds >= 0.5 && std::isfinite(xv_options.block_seconds)))
@@ -471,7 +473,7 @@ int RunCalibrate(int argc, char** argv) {
   if (xv_options.enabled)
     CrossValidateResult(split, options, out_dir, log, &result.result);
   else
-    log("cross-validation off (--cross-validate turns it on): sigma is the formal one");
+    log("cross-validation off (--no-cross-validate): sigma is the formal one");
 
   const report::StageTime calibration = clock.Lap("calibration");
   try {

@@ -101,7 +101,7 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
                                 out + " --threads 2 --no-cross-validate",
                             out + "/run_off");
   ASSERT_TRUE(off.code == 0 || off.code == 3) << off.err;
-  EXPECT_NE(Slurp(out + "/log.txt").find("cross-validation off (--cross-validate turns it on)"),
+  EXPECT_NE(Slurp(out + "/log.txt").find("cross-validation off (--no-cross-validate)"),
             std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(out + "/crossval"));
   const auto k1 = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +

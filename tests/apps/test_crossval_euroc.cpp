@@ -72,14 +72,13 @@ RigConfig Formal(RigConfig rig) {
   return rig;
 }
 
-// With --noise estimate (per-frame weights included) --cross-validate; both are opt-in, so this
-// is not yet the issue's "default command" (docs/cross_validation.md "Measured": session 10
-// 93.3 % / rms z 1.95, session 11 before the per-frame weights 93.3 % / 1.56, with them 1.40).
-TEST(CrossvalEuroc, TwoPartsOfTheFirstHalfAgreeWithinTheReportedSigma) {
+// The two parts calibrated with `calibrate ... FLAGS` (cross-validation on by default), compared
+// by their reported sigma against the issue 20 bar; the formal sigma's numbers are printed beside.
+void ExpectPartsAgree(const std::string& flags, const std::string& name) {
   const fs::path data = SharedData() / "euroc_imu_april_first_half";
   if (!fs::exists(data / "imu0" / "data.csv"))
     GTEST_SKIP() << data << " is absent (the shared real data)";
-  const fs::path work = fs::path(::testing::TempDir()) / "ctcal_crossval_euroc";
+  const fs::path work = fs::path(::testing::TempDir()) / ("ctcal_crossval_euroc_" + name);
   const auto [lo, hi] = Span(data / "imu0" / "data.csv");
   const std::int64_t mid = lo + (hi - lo) / 2;
   std::vector<RigConfig> results;
@@ -89,10 +88,10 @@ TEST(CrossvalEuroc, TwoPartsOfTheFirstHalfAgreeWithinTheReportedSigma) {
     for (const char* file : {"imu0/data.csv", "cam0/data.csv", "cam0/corners.csv", "cam1/data.csv",
                              "cam1/corners.csv"})
       CutCsv(data / file, dir / "data" / file, t0, t1);
-    const auto r = RunCtcal("calibrate --rig " + (data / "rig.yaml").string() + " --data " +
-                                (dir / "data").string() + " --out " + (dir / "out").string() +
-                                " --noise estimate --cross-validate",
-                            (dir / "run").string());
+    const auto r =
+        RunCtcal("calibrate --rig " + (data / "rig.yaml").string() + " --data " +
+                     (dir / "data").string() + " --out " + (dir / "out").string() + flags,
+                 (dir / "run").string());
     ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
     std::vector<std::string> warnings;
     results.push_back(LoadRig((dir / "out" / "result.yaml").string(), &warnings));
@@ -109,6 +108,19 @@ TEST(CrossvalEuroc, TwoPartsOfTheFirstHalfAgreeWithinTheReportedSigma) {
   }
   EXPECT_GE(*after.summary.fraction_within_3_sigma, 0.90);
   EXPECT_LE(*after.summary.rms_z, 1.5);
+}
+
+// The issue's command: the default (stated noise, cross-validation on). Session 11: 90.0 % within
+// 3 sigma, rms z 1.30 (formal: rms z ~20).
+TEST(CrossvalEuroc, TwoPartsAgreeWithinTheReportedSigmaWithTheDefaultCommand) {
+  ExpectPartsAgree("", "default");
+}
+
+// With the noise estimated (per-frame weights included): session 10 93.3 % / rms z 1.95, session
+// 11 before the per-frame weights 93.3 % / 1.56, with them 93.3 % / 1.40
+// (docs/cross_validation.md).
+TEST(CrossvalEuroc, TwoPartsAgreeWithinTheReportedSigmaWithTheNoiseEstimated) {
+  ExpectPartsAgree(" --noise estimate", "noise");
 }
 
 }  // namespace
