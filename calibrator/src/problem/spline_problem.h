@@ -309,7 +309,8 @@ class SplineProblem {
   void RemoveOutliers(double probability, std::vector<CameraOutliers>* report);
   // The noise estimation's (spline_problem_noise.h): every corner back in the problem (the next
   // RemoveOutliers gates them all at the current weights), and per camera the robust variance
-  // factor of its corners at the current values, median |e|^2 / (2 ln 2).
+  // factor of all its corners (also those a gate removed) at the current values,
+  // median |e|^2 / (2 ln 2).
   void RestoreCorners();
   std::vector<double> RobustCornerFactors();
 

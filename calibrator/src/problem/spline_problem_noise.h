@@ -151,7 +151,7 @@ std::vector<double> SplineProblem<N, Rep>::RobustCornerFactors() {
     sq.reserve(cam.corners.size());
     Eigen::Vector2d e;
     for (std::size_t i = 0; i < cam.corners.size(); ++i) {
-      if (!cam.removed[i] && EvaluateCorner(cam, i, &e))
+      if (EvaluateCorner(cam, i, &e))  // every corner, also those a gate removed
         sq.push_back(e.squaredNorm());
     }
     if (sq.empty())
@@ -327,10 +327,6 @@ void EstimateNoise(SplineProblem<N, Rep>* sp, Prepared* prep, const SolveFn& sol
                    const SplineCalibratorOptions& options, const CalibrationLog& log,
                    SplineCalibrationResult* out) {
   log("  noise estimation (variance components; the stated noise the start)");
-  std::vector<std::vector<bool>> gated;
-  for (const PreparedCamera& cam : prep->cameras)
-    gated.push_back(cam.removed);
-  sp->RestoreCorners();
   const std::vector<double> robust = sp->RobustCornerFactors();
   // Only a scale far from 1 is applied (the problem is then rebuilt); the rounds refine the rest.
   const bool rescaled = std::any_of(robust.begin(), robust.end(),
@@ -344,10 +340,6 @@ void EstimateNoise(SplineProblem<N, Rep>* sp, Prepared* prep, const SolveFn& sol
     for (HeldCorner& h : prep->cameras[c].corners)
       h.sigma_px *= std::sqrt(robust[c]);
   }
-  // RobustCornerFactors needed every corner in; the stages' gate is restored before Regate
-  // compares.
-  for (std::size_t c = 0; c < prep->cameras.size(); ++c)
-    prep->cameras[c].removed = gated[c];
   if (Regate(sp, prep, options, log, out) || rescaled) {
     sp->Build(false);
     solve("  re-solve at the cameras' robust noise scale");
