@@ -36,8 +36,10 @@ SplineCalibrationResult Calibrate(bool estimate) {
   return CalibrateSpline(rig, std::move(data), o, [](const std::string&) {});
 }
 
-// Disabled: first run on the merged main (session 9): the EuRoC bar [0.8, 1.25] is not met yet
-// (issue 19 open).
+// Disabled: the EuRoC bar [0.8, 1.25] is not met for the IMU (issue 19 open). Session 11: the
+// cameras are at 0.996 / 0.998, the IMU at 0.72 in every 2 s window, which is sqrt(r/n) of the
+// 10 ms knots the rule picks (docs/noise_estimation.md "Measured": coarser knots reach the bar
+// only by absorbing spline misfit as noise).
 TEST(NoiseEuroc, DISABLED_WhitenedResidualsNearOneOverallAndInEveryWindow) {
   if (!fs::exists(EurocFolder() / "rig.yaml"))
     GTEST_SKIP() << "real data absent: " << EurocFolder().string();
