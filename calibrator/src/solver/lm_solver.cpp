@@ -59,7 +59,8 @@ struct Scratch {
   Eigen::VectorXd r;
   std::vector<Eigen::VectorXd> ambient;  // per parameter block, rows x ambient
   std::vector<double*> jacobians;
-  RowMatrix J;  // rows x cols, tangent
+  RowMatrix J;        // rows x cols, tangent
+  Eigen::MatrixXd G;  // J^T J of the block (NormalEquations::AddBlock)
 };
 
 // Ceres' robust loss applied to a block's residuals and Jacobian (Triggs et al., "Bundle
@@ -93,6 +94,10 @@ void ApplyLoss(const ceres::LossFunction& loss, int rows, double* r, RowMatrix* 
   res *= scaling;
 }
 
+// Border columns per solve of the Schur complement (SolveStep): each solve reads the whole factor,
+// each column costs 2 x 8 bytes per nuisance parameter.
+constexpr int kSchurColumns = 16;
+
 }  // namespace
 
 class LevenbergMarquardt::Impl {
@@ -120,10 +125,18 @@ class LevenbergMarquardt::Impl {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
     const std::size_t h =
         static_cast<std::size_t>(H_->H_nn().nonZeros()) * 12 + (n * c + c * c) * 8;
-    // H on every thread, and the step's [H_nc g_n] and A_nn^-1 [H_nc g_n].
-    return h * static_cast<std::size_t>(threads_) + 2 * n * (c + 1) * 8;
+    // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
+    // of H_nn, and its right-hand sides and solutions (SolveStep: 8 border columns at a time).
+    return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
+           static_cast<std::size_t>(H_->H_nn().nonZeros()) * 12 + 2 * n * (kSchurColumns + 1) * 8;
   }
   std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
+  std::size_t CeresBytes() const {
+    const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
+    // CRS: a value and its column index per entry; J^T J as its upper triangle.
+    return jacobian_values_ * 12 +
+           (static_cast<std::size_t>(H_->H_nn().nonZeros()) + n * c + c * (c + 1) / 2) * 12;
+  }
 
  private:
   void Setup(const std::vector<double*>& border);
@@ -134,6 +147,7 @@ class LevenbergMarquardt::Impl {
   bool UpdatePlusJacobians();
   void GradientNorms(ceres::IterationSummary* it);
   bool SolveStep(double radius, Eigen::VectorXd* step);
+  void PartitionBlocks(int nuisance_blocks);
 
   const ceres::Solver::Options o_;  // a copy: the solver outlives the caller's options
   ceres::Problem& problem_;
@@ -143,7 +157,11 @@ class LevenbergMarquardt::Impl {
   std::vector<int> offset_;  // ambient offset of each column block in x
   std::vector<Block> blocks_;
   std::unique_ptr<NormalEquations> H_;
-  std::vector<std::unique_ptr<NormalEquations>> partial_H_;  // threads 1.. (thread 0 sums into H_)
+  // Which residual blocks each thread assembles into the one H_ (Evaluate; PartitionBlocks), and
+  // those that straddle two threads' nuisance blocks, assembled after them.
+  std::vector<std::vector<std::size_t>> thread_blocks_;
+  std::vector<std::size_t> shared_blocks_;
+  std::vector<Eigen::MatrixXd> partial_cc_;  // threads 1..: their H_cc (thread 0 adds into H_'s)
   std::vector<Scratch> scratch_;
   Eigen::VectorXd g_;  // J^T r at the current point
   double fixed_cost_ = 0.0;
@@ -254,8 +272,8 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
   H_ = std::make_unique<NormalEquations>(std::move(tangent), nuisance, blocks_of);
   threads_ = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads_),
                                                     std::max<std::size_t>(blocks_.size(), 1)));
-  for (int t = 1; t < threads_; ++t)
-    partial_H_.push_back(std::make_unique<NormalEquations>(*H_));
+  PartitionBlocks(nuisance);
+  partial_cc_.assign(static_cast<std::size_t>(threads_ - 1), Eigen::MatrixXd());
   scratch_.resize(static_cast<std::size_t>(threads_));
   g_.resize(H_->n() + H_->c());
 }
@@ -305,10 +323,80 @@ bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scra
   return true;
 }
 
+// The threads' shares of the assembly of H = J^T J. Every thread adds into the one H (a copy of H
+// per thread was the solver's largest memory, ~20 MB per thread on EuRoC's 36 s), so no two
+// threads may write the same nuisance block's column of H_nn or row of H_nc at once. The nuisance
+// blocks are cut into `threads_` ranges of a position: a residual block's key is its first
+// nuisance block (the problem's order: the trajectory's knots in time), a nuisance block's
+// position the smallest key of the residual blocks that read it (a bias knot: the first sample of
+// its support), and the cuts put equal work (rows x columns^2) below each key. A residual block
+// whose nuisance blocks all lie in one range is that thread's; one that straddles a cut (a few
+// knots' worth of corners and samples, and the samples whose bias knots began before the cut) is
+// assembled after the threads, in its order. The result depends only on the thread count.
+void LevenbergMarquardt::Impl::PartitionBlocks(int nuisance_blocks) {
+  const std::size_t T = static_cast<std::size_t>(threads_);
+  thread_blocks_.assign(T, {});
+  shared_blocks_.clear();
+  constexpr int kNone = std::numeric_limits<int>::max();
+  std::vector<int> key(blocks_.size(), kNone);
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    for (const NormalEquations::Run& run : blocks_[i].runs) {
+      if (run.block < nuisance_blocks)
+        key[i] = std::min(key[i], run.block);
+    }
+  }
+  std::vector<int> position(static_cast<std::size_t>(nuisance_blocks), kNone);
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    for (const NormalEquations::Run& run : blocks_[i].runs) {
+      if (run.block < nuisance_blocks)
+        position[static_cast<std::size_t>(run.block)] =
+            std::min(position[static_cast<std::size_t>(run.block)], key[i]);
+    }
+  }
+  // Work per key, then the cuts: cut[t] is the first key of thread t's range.
+  std::vector<double> work(static_cast<std::size_t>(nuisance_blocks) + 1, 0.0);
+  double total = 0.0;
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    const double w = static_cast<double>(blocks_[i].rows) * blocks_[i].cols * blocks_[i].cols;
+    work[key[i] == kNone ? work.size() - 1 : static_cast<std::size_t>(key[i])] += w;
+    total += w;
+  }
+  std::vector<int> cut(T + 1, 0);
+  cut[T] = kNone;
+  double sum = 0.0;
+  std::size_t t = 1;
+  for (int k = 0; k < nuisance_blocks && t < T; ++k) {
+    sum += work[static_cast<std::size_t>(k)];
+    while (t < T && sum >= total * static_cast<double>(t) / static_cast<double>(T))
+      cut[t++] = k + 1;
+  }
+  for (; t < T; ++t)
+    cut[t] = nuisance_blocks;
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    if (key[i] == kNone) {  // no nuisance block: H_cc and g_c only, the thread's own
+      thread_blocks_[i % T].push_back(i);
+      continue;
+    }
+    int lo = kNone, hi = 0;
+    for (const NormalEquations::Run& run : blocks_[i].runs) {
+      if (run.block < nuisance_blocks) {
+        lo = std::min(lo, position[static_cast<std::size_t>(run.block)]);
+        hi = std::max(hi, position[static_cast<std::size_t>(run.block)]);
+      }
+    }
+    const auto range =
+        static_cast<std::size_t>(std::upper_bound(cut.begin(), cut.end(), lo) - cut.begin() - 1);
+    if (hi < cut[range + 1])
+      thread_blocks_[range].push_back(i);
+    else
+      shared_blocks_.push_back(i);
+  }
+}
+
 // The cost at the values in the parameter blocks' memory (without the fixed cost) and, with
-// `jacobian`, H = J^T J and g = J^T r there. Thread t takes the chunks t, t + T, t + 2T, ... of
-// kChunk residual blocks into its own partial sums (the sensors' blocks mixed on every thread),
-// added in thread order: the same sums for the same thread count, whatever the schedule.
+// `jacobian`, H = J^T J and g = J^T r there. Without `jacobian` thread t takes the chunks t, t + T,
+// t + 2T, ... of kChunk residual blocks; with it, its share of PartitionBlocks. The partial sums
+// are added in thread order: the same sums for the same thread count, whatever the schedule.
 bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   constexpr std::size_t kChunk = 64;
   const std::size_t T = static_cast<std::size_t>(threads_);
@@ -319,35 +407,58 @@ bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   // which point it returns to, and a callback's cache keyed by its calls stays correct that way.
   if (point_callback_ != nullptr)
     point_callback_->PrepareForEvaluation(jacobian, true);
-  ParallelFor(threads_, T, [&](std::size_t t) {
-    NormalEquations* H = t == 0 ? H_.get() : partial_H_[t - 1].get();
+  // One residual block into the sums of thread t (false: not finite or not evaluable).
+  const auto add = [&](std::size_t t, std::size_t i, Eigen::MatrixXd* H_cc) {
+    const Block& b = blocks_[i];
     Scratch& s = scratch_[t];
-    if (jacobian) {
-      H->SetZero();
-      g[t].setZero(g_.size());
+    double c = 0.0;
+    if (!EvaluateBlock(b, jacobian, &s, &c))
+      return false;
+    costs[t] += c;
+    if (!jacobian)
+      return true;
+    H_->AddBlock(s.J.data(), b.rows, b.cols, b.runs, &s.G, H_cc);
+    const Eigen::Map<const Eigen::VectorXd> r(s.r.data(), b.rows);
+    for (const NormalEquations::Run& run : b.runs) {
+      const int t_b = H_->Tangent(run.block);
+      g[t].segment(H_->Offset(run.block), t_b).noalias() +=
+          s.J.middleCols(run.first, t_b).transpose() * r;
     }
-    for (std::size_t first = t * kChunk; first < blocks_.size(); first += T * kChunk) {
-      const std::size_t last = std::min(first + kChunk, blocks_.size());
-      for (std::size_t i = first; i < last; ++i) {
-        const Block& b = blocks_[i];
-        double c = 0.0;
-        if (!EvaluateBlock(b, jacobian, &s, &c)) {
-          ok[t] = 0;
-          return;
+    return true;
+  };
+  if (jacobian)
+    H_->SetZero();
+  ParallelFor(threads_, T, [&](std::size_t t) {
+    if (!jacobian) {
+      for (std::size_t first = t * kChunk; first < blocks_.size(); first += T * kChunk) {
+        for (std::size_t i = first; i < std::min(first + kChunk, blocks_.size()); ++i) {
+          if (!add(t, i, nullptr)) {
+            ok[t] = 0;
+            return;
+          }
         }
-        costs[t] += c;
-        if (!jacobian)
-          continue;
-        H->AddBlock(s.J.data(), b.rows, b.cols, b.runs);
-        const Eigen::Map<const Eigen::VectorXd> r(s.r.data(), b.rows);
-        for (const NormalEquations::Run& run : b.runs) {
-          const int t_b = H->Tangent(run.block);
-          g[t].segment(H->Offset(run.block), t_b).noalias() +=
-              s.J.middleCols(run.first, t_b).transpose() * r;
-        }
+      }
+      return;
+    }
+    Eigen::MatrixXd* H_cc = t == 0 ? &H_->H_cc() : &partial_cc_[t - 1];
+    if (t > 0)
+      H_cc->setZero(H_->c(), H_->c());
+    g[t].setZero(g_.size());
+    for (const std::size_t i : thread_blocks_[t]) {
+      if (!add(t, i, H_cc)) {
+        ok[t] = 0;
+        return;
       }
     }
   });
+  if (jacobian && ok[0]) {
+    for (const std::size_t i : shared_blocks_) {
+      if (!add(0, i, &H_->H_cc())) {
+        ok[0] = 0;
+        break;
+      }
+    }
+  }
   *cost = 0.0;
   for (std::size_t t = 0; t < T; ++t) {
     if (!ok[t])
@@ -359,7 +470,7 @@ bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   if (jacobian) {
     g_ = g[0];
     for (std::size_t t = 1; t < T; ++t) {
-      H_->AddValues(*partial_H_[t - 1]);
+      H_->H_cc() += partial_cc_[t - 1];
       g_ += g[t];
     }
   }
@@ -423,7 +534,13 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   Eigen::VectorXd D = H_->Diagonal().cwiseMax(o_.min_lm_diagonal).cwiseMin(o_.max_lm_diagonal);
   D /= radius;
   step->resize(n + c);
-  Eigen::MatrixXd Y;  // A_nn^-1 [H_nc g_n]
+  // A_nn^-1 applied to dense columns (false when the factorisation or the result is not finite).
+  const auto solve_nn = [&](const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
+    *X = llt_->solve(B);
+    return llt_->info() == Eigen::Success && X->allFinite();
+  };
+  Eigen::VectorXd y_g;  // A_nn^-1 g_n
+  Eigen::MatrixXd S;    // the Schur complement on the border
   if (n > 0) {
     NormalEquations::SparseColMajor A = H_->H_nn();
     for (int i = 0; i < n; ++i)
@@ -437,30 +554,49 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     llt_->factorize(A);
     if (llt_->info() != Eigen::Success)
       return false;
-    Eigen::MatrixXd B(n, c + 1);
-    B.leftCols(c) = H_->H_nc();
-    B.col(c) = g_.head(n);
-    Y = llt_->solve(B);
-    if (llt_->info() != Eigen::Success || !Y.allFinite())
-      return false;
+    // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time (g_n with the first): A_nn^-1
+    // H_nc whole (n x c, and once more as the solve's right-hand side) was the solver's largest
+    // block after H (EuRoC's 36 s: 2 x 9 MB), for one more single-column solve for d_n below.
+    constexpr int kColumns = kSchurColumns;
+    S = H_->H_cc();
+    Eigen::MatrixXd B, Y;
+    for (int j = 0; j == 0 || j < c; j += kColumns) {
+      const int w = std::min(kColumns, c - j);
+      const int g_col = j == 0 ? 1 : 0;
+      B.resize(n, w + g_col);
+      B.leftCols(w) = H_->H_nc().middleCols(j, w);
+      if (g_col)
+        B.col(w) = g_.head(n);
+      if (!solve_nn(B, &Y))
+        return false;
+      if (w > 0)
+        S.middleCols(j, w).noalias() -= H_->H_nc().transpose() * Y.leftCols(w);
+      if (g_col)
+        y_g = Y.col(w);
+    }
   }
   if (c > 0) {
-    Eigen::MatrixXd S = H_->H_cc();
+    if (n == 0)
+      S = H_->H_cc();
     S.diagonal() += D.tail(c);
     Eigen::VectorXd rhs = -g_.tail(c);
-    if (n > 0) {
-      S.noalias() -= H_->H_nc().transpose() * Y.leftCols(c);
-      rhs.noalias() += H_->H_nc().transpose() * Y.col(c);
-    }
+    if (n > 0)
+      rhs.noalias() += H_->H_nc().transpose() * y_g;
     const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(S);
     if (llt.info() != Eigen::Success)
       return false;
     step->tail(c) = llt.solve(rhs);
   }
   if (n > 0) {
-    step->head(n) = -Y.col(c);
-    if (c > 0)
-      step->head(n).noalias() -= Y.leftCols(c) * step->tail(c);
+    // d_n = -A_nn^-1 (g_n + H_nc d_c).
+    if (c == 0) {
+      step->head(n) = -y_g;
+    } else {
+      Eigen::MatrixXd d_n;
+      if (!solve_nn(g_.head(n) + H_->H_nc() * step->tail(c), &d_n))
+        return false;
+      step->head(n) = -d_n;
+    }
   }
   return step->allFinite();
 }
@@ -497,7 +633,7 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
   const auto finish = [&](ceres::TerminationType type, const std::string& message, double x_cost) {
     // Only the normal equations at the final point outlive the solve (MarginalizeToBorder).
     final_point_ = type != ceres::FAILURE && jacobian_at_x;
-    partial_H_.clear();
+    partial_cc_.clear();
     scratch_.clear();
     llt_.reset();
     S.termination_type = type;
@@ -694,6 +830,9 @@ std::size_t LevenbergMarquardt::NormalEquationsBytes() const {
 }
 std::size_t LevenbergMarquardt::JacobianBytes() const {
   return impl_->JacobianBytes();
+}
+std::size_t LevenbergMarquardt::CeresBytes() const {
+  return impl_->CeresBytes();
 }
 MarginalInformation LevenbergMarquardt::MarginalizeToBorder() {
   return impl_->MarginalizeToBorder();

@@ -147,16 +147,18 @@ void NormalEquations::Add(const ceres::CRSMatrix& J, const std::vector<int>& row
   }
 }
 
-void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<Run>& runs) {
+void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<Run>& runs,
+                               Eigen::MatrixXd* G, Eigen::MatrixXd* H_cc) {
   if (k == 0 || m == 0)
     return;
   const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> M(
       J, m, k);
-  G_.resize(k, k);
-  G_.setZero();
-  G_.selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
+  G->resize(k, k);
+  G->setZero();
+  G->selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
   // Only G's lower triangle is set: G(a, b) for entry a after entry b, else G(b, a).
-  const auto g = [this](int a, int b) { return a >= b ? G_(a, b) : G_(b, a); };
+  const Eigen::MatrixXd& Gr = *G;
+  const auto g = [&Gr](int a, int b) { return a >= b ? Gr(a, b) : Gr(b, a); };
   double* values = H_nn_.valuePtr();
   const int* outer = H_nn_.outerIndexPtr();
   for (const Run& v : runs) {
@@ -172,7 +174,7 @@ void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<
         const int cj = offset_[static_cast<std::size_t>(j)] - n_;
         for (int q = 0; q < tj; ++q) {
           for (int p = 0; p < ti; ++p)
-            H_cc_(ri + p, cj + q) += g(u.first + p, v.first + q);
+            (*H_cc)(ri + p, cj + q) += g(u.first + p, v.first + q);
         }
       }
       continue;

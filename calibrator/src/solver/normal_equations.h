@@ -48,7 +48,15 @@ class NormalEquations {
   void Add(const ceres::CRSMatrix& J, const std::vector<int>& rows_per_block);
 
   // Adds J^T J of one residual block: J is m x k, row-major, its columns the runs' blocks.
-  void AddBlock(const double* J, int m, int k, const std::vector<Run>& runs);
+  void AddBlock(const double* J, int m, int k, const std::vector<Run>& runs) {
+    AddBlock(J, m, k, runs, &G_, &H_cc_);
+  }
+  // The same with the caller's scratch `G` and the border-border block added to `H_cc` (c x c):
+  // threads may add blocks at once as long as no two of them share a nuisance block (each
+  // nuisance block's column of H_nn and row of H_nc is written by one thread), each with its own
+  // G and H_cc (summed afterwards).
+  void AddBlock(const double* J, int m, int k, const std::vector<Run>& runs, Eigen::MatrixXd* G,
+                Eigen::MatrixXd* H_cc);
 
   // Every value 0 (the pattern kept).
   void SetZero();
@@ -64,6 +72,7 @@ class NormalEquations {
   const SparseColMajor& H_nn() const { return H_nn_; }
   Eigen::MatrixXd& H_nc() { return H_nc_; }
   const Eigen::MatrixXd& H_nc() const { return H_nc_; }
+  Eigen::MatrixXd& H_cc() { return H_cc_; }
   const Eigen::MatrixXd& H_cc() const { return H_cc_; }
   // Frees the values and the pattern (MarginalizeNuisance, once it has taken them over).
   void Release();

@@ -61,6 +61,9 @@ class LevenbergMarquardt {
   // this solver does not): for a caller choosing the solver by memory.
   std::size_t NormalEquationsBytes() const;
   std::size_t JacobianBytes() const;
+  // What ceres::Solve (SPARSE_NORMAL_CHOLESKY) holds for the same problem besides the common
+  // factorisation: the Jacobian and J^T J, each in compressed rows.
+  std::size_t CeresBytes() const;
 
   // After Solve (one that ended by a tolerance, not by a callback or the iteration limit right
   // after a step: the normal equations there were never assembled): the information of the
