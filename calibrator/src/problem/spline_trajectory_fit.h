@@ -16,14 +16,14 @@
 // specific force's -R_W_B^T with respect to g_W.
 //
 // Structure: a residual of segment s touches knots s .. s+N-1, so H is block-banded (N 6x6 blocks
-// per block row) plus 3 gravity columns; it is assembled band-wise and factored by a sparse LDL^T
-// in natural order (no fill beyond the band and the border). Each step is damped
+// per block row) plus 3 gravity columns; it is assembled band-wise and factored block-band-wise
+// (SolveStep: no fill beyond the band and the border). Each step is damped
 // Levenberg-Marquardt style (lambda scales diag(H), grows on a rejected step), which also keeps
 // knots without data determined.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -246,48 +246,86 @@ class TrajectoryFit {
                                              clock.inv_dt, derivatives, g_W, kin, J);
   }
 
-  // Solves (H + lambda diag(H) + eps I) dx = b.
+  // Solves (H + lambda diag(H) + eps I) dx = b by a block Cholesky factorisation H = R^T R, R
+  // upper block-banded like H's upper half (block row k: R_kk = L_k^T with L_k the Cholesky factor
+  // of the updated diagonal block, R_k,k+j = L_k^-1 H'_k,k+j for j < N) plus the gravity border's
+  // 3 dense columns: no fill beyond the band. Forward substitution R^T y = b rides along with the
+  // factorisation, then R dx = y backwards. O(K N^2 6^3) with fixed-size blocks: the general
+  // sparse LDL^T it replaces, fed ~36 N triplets per knot every step, took ~0.45 s of the fit on
+  // EuRoC's 36 s (5115 knots).
   bool SolveStep(double lambda, Eigen::VectorXd* dx) {
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(static_cast<std::size_t>(K_) * (36 * N + 18) + 9);
+    using Vec6 = Eigen::Matrix<double, 6, 1>;
+    using Mat63 = Eigen::Matrix<double, 6, 3>;
     double max_diag = 0.0;
     for (int k = 0; k < K_; ++k)
       max_diag = std::max(max_diag, Band(k, 0).diagonal().maxCoeff());
     const double eps = 1e-12 * std::max(max_diag, 1.0);
-    const auto diag = [&](double d) { return d + lambda * d + eps; };
+    std::vector<Mat6, Eigen::aligned_allocator<Mat6>> R = band_;
     for (int k = 0; k < K_; ++k) {
-      for (int j = 0; j < N && k + j < K_; ++j) {
-        const Mat6& B = Band(k, j);
-        for (int a = 0; a < 6; ++a) {
-          for (int c = 0; c < 6; ++c) {
-            const int row = 6 * k + a, col = 6 * (k + j) + c;
-            if (row > col)
-              continue;
-            t.emplace_back(row, col, row == col ? diag(B(a, c)) : B(a, c));
-          }
-        }
+      Mat6& D = R[static_cast<std::size_t>(N * k)];
+      D.diagonal() = D.diagonal() * (1.0 + lambda) + Vec6::Constant(eps);
+    }
+    const bool g = o_.use_accel;
+    Eigen::Matrix<double, Eigen::Dynamic, 3> Rg;
+    Eigen::Matrix3d Hg = Hgg_;
+    if (g) {
+      Rg = border_;
+      Hg.diagonal() = Hg.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(eps);
+    }
+    Eigen::VectorXd y = b_;
+    const auto at = [&R](int k, int j) -> Mat6& { return R[static_cast<std::size_t>(N * k + j)]; };
+    std::vector<Eigen::LLT<Mat6>> L(static_cast<std::size_t>(K_));
+    for (int k = 0; k < K_; ++k) {
+      Eigen::LLT<Mat6>& Lk = L[static_cast<std::size_t>(k)];
+      Lk.compute(at(k, 0));
+      if (Lk.info() != Eigen::Success)
+        return false;
+      const auto Lkk = Lk.matrixL();
+      for (int j = 1; j < N && k + j < K_; ++j)
+        Lkk.solveInPlace(at(k, j));
+      if (g) {
+        Mat63 rg = Rg.template middleRows<6>(6 * k);
+        Lkk.solveInPlace(rg);
+        Rg.template middleRows<6>(6 * k) = rg;
+      }
+      Vec6 yk = y.template segment<6>(6 * k);
+      Lkk.solveInPlace(yk);
+      y.template segment<6>(6 * k) = yk;
+      for (int i = 1; i < N && k + i < K_; ++i) {
+        const Mat6& Rki = at(k, i);
+        for (int j = i; j < N && k + j < K_; ++j)
+          at(k + i, j - i).noalias() -= Rki.transpose() * at(k, j);
+        if (g)
+          Rg.template middleRows<6>(6 * (k + i)).noalias() -=
+              Rki.transpose() * Rg.template middleRows<6>(6 * k);
+        y.template segment<6>(6 * (k + i)).noalias() -= Rki.transpose() * yk;
+      }
+      if (g) {
+        Hg.noalias() -=
+            Rg.template middleRows<6>(6 * k).transpose() * Rg.template middleRows<6>(6 * k);
+        y.template tail<3>().noalias() -= Rg.template middleRows<6>(6 * k).transpose() * yk;
       }
     }
-    if (o_.use_accel) {
-      for (int row = 0; row < 6 * K_; ++row) {
-        for (int c = 0; c < 3; ++c)
-          t.emplace_back(row, 6 * K_ + c, border_(row, c));
-      }
-      for (int a = 0; a < 3; ++a) {
-        for (int c = a; c < 3; ++c)
-          t.emplace_back(6 * K_ + a, 6 * K_ + c, a == c ? diag(Hgg_(a, c)) : Hgg_(a, c));
-      }
+    dx->resize(n_);
+    Eigen::Vector3d x_g = Eigen::Vector3d::Zero();
+    if (g) {
+      const Eigen::LLT<Eigen::Matrix3d> Lg(Hg);
+      if (Lg.info() != Eigen::Success)
+        return false;
+      // R_gg = L_g^T: the forward step's L_g^-1 and the backward step's L_g^-T at once.
+      x_g = Lg.solve(y.template tail<3>());
+      dx->template tail<3>() = x_g;
     }
-    Eigen::SparseMatrix<double> H(n_, n_);
-    H.setFromTriplets(t.begin(), t.end());
-    t.clear();
-    t.shrink_to_fit();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
-        ldlt(H);
-    if (ldlt.info() != Eigen::Success)
-      return false;
-    *dx = ldlt.solve(b_);
-    return ldlt.info() == Eigen::Success && dx->allFinite();
+    for (int k = K_ - 1; k >= 0; --k) {
+      Vec6 r = y.template segment<6>(6 * k);
+      for (int j = 1; j < N && k + j < K_; ++j)
+        r.noalias() -= at(k, j) * dx->template segment<6>(6 * (k + j));
+      if (g)
+        r.noalias() -= Rg.template middleRows<6>(6 * k) * x_g;
+      L[static_cast<std::size_t>(k)].matrixU().solveInPlace(r);
+      dx->template segment<6>(6 * k) = r;
+    }
+    return dx->allFinite();
   }
 
   void ApplyStep(const Eigen::VectorXd& dx) {

@@ -123,19 +123,18 @@ class LevenbergMarquardt::Impl {
   MarginalInformation MarginalizeToBorder();
   std::size_t NormalEquationsBytes() const {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
-    const std::size_t h =
-        static_cast<std::size_t>(H_->H_nn().nonZeros()) * 12 + (n * c + c * c) * 8;
+    const std::size_t h = static_cast<std::size_t>(H_->NonZeros()) * 12 + (n * c + c * c) * 8;
     // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
     // of H_nn, and its right-hand sides and solutions (SolveStep: 8 border columns at a time).
     return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
-           static_cast<std::size_t>(H_->H_nn().nonZeros()) * 12 + 2 * n * (kSchurColumns + 1) * 8;
+           static_cast<std::size_t>(H_->NonZeros()) * 12 + 2 * n * (kSchurColumns + 1) * 8;
   }
   std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
   std::size_t CeresBytes() const {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
     // CRS: a value and its column index per entry; J^T J as its upper triangle.
     return jacobian_values_ * 12 +
-           (static_cast<std::size_t>(H_->H_nn().nonZeros()) + n * c + c * (c + 1) / 2) * 12;
+           (static_cast<std::size_t>(H_->NonZeros()) + n * c + c * (c + 1) / 2) * 12;
   }
 
  private:
@@ -269,7 +268,9 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
     blocks_of.push_back(std::move(cols));
     blocks_.push_back(std::move(b));
   }
-  H_ = std::make_unique<NormalEquations>(std::move(tangent), nuisance, blocks_of);
+  // The pattern's shape only: the caller may hand the problem to Ceres by NormalEquationsBytes()
+  // before any of it is allocated (Solve allocates).
+  H_ = std::make_unique<NormalEquations>(std::move(tangent), nuisance, blocks_of, false);
   threads_ = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads_),
                                                     std::max<std::size_t>(blocks_.size(), 1)));
   PartitionBlocks(nuisance);
@@ -603,6 +604,7 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
 
 void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
   const auto t_start = Clock::now();
+  H_->Allocate();
   ceres::Solver::Summary& S = *summary;
   S = ceres::Solver::Summary();
   S.minimizer_type = ceres::TRUST_REGION;

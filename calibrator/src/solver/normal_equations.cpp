@@ -10,7 +10,7 @@
 namespace ctcal {
 
 NormalEquations::NormalEquations(std::vector<int> tangent, int nuisance_blocks,
-                                 const std::vector<std::vector<int>>& blocks_of)
+                                 const std::vector<std::vector<int>>& blocks_of, bool allocate)
     : tangent_(std::move(tangent)), nb_(nuisance_blocks) {
   offset_.resize(tangent_.size() + 1, 0);
   for (std::size_t b = 0; b < tangent_.size(); ++b)
@@ -50,6 +50,16 @@ NormalEquations::NormalEquations(std::vector<int> tangent, int nuisance_blocks,
   }
   if (nnz > std::numeric_limits<int>::max())
     throw std::runtime_error("normal equations: the nuisance information has too many entries");
+  nnz_ = nnz;
+  if (allocate)
+    Allocate();
+}
+
+void NormalEquations::Allocate() {
+  if (allocated_)
+    return;
+  allocated_ = true;
+  const std::int64_t nnz = nnz_;
   // Column q of block j: the rows q..t-1 of block j (its diagonal first), then every block below.
   H_nn_.resize(n_, n_);
   H_nn_.resizeNonZeros(static_cast<Eigen::Index>(nnz));

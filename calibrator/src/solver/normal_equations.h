@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <vector>
 
 namespace ctcal {
@@ -32,8 +33,14 @@ class NormalEquations {
 
   // tangent: tangent size of each column block in column order; the first `nuisance_blocks` are
   // the nuisance states. blocks_of: for every residual block, its column blocks (any order).
+  // allocate false: only the pattern's shape (NonZeros) until Allocate(), so that a caller can
+  // choose by memory before any of it is taken.
   NormalEquations(std::vector<int> tangent, int nuisance_blocks,
-                  const std::vector<std::vector<int>>& blocks_of);
+                  const std::vector<std::vector<int>>& blocks_of, bool allocate = true);
+  // The pattern and the values (zero); nothing when they are already allocated.
+  void Allocate();
+  // Entries of H_nn's lower triangle (also before Allocate).
+  std::int64_t NonZeros() const { return nnz_; }
 
   int n() const { return n_; }
   int c() const { return c_; }
@@ -86,7 +93,9 @@ class NormalEquations {
   std::vector<int> block_of_col_;
   std::vector<std::vector<int>> below_;        // per nuisance column block, sorted row blocks
   std::vector<std::vector<int>> below_start_;  // their first row's place below the diagonal block
-  SparseColMajor H_nn_;                        // lower triangle
+  std::int64_t nnz_ = 0;
+  bool allocated_ = false;
+  SparseColMajor H_nn_;  // lower triangle
   Eigen::MatrixXd H_nc_;
   Eigen::MatrixXd H_cc_;
   std::vector<Run> runs_;  // scratch of Add
