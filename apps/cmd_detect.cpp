@@ -114,7 +114,10 @@ int RunDetect(int argc, char** argv) {
       "camera", po::value(&camera),
       "camera folder name (default: every DATA/cam* folder with a data.csv)")(
       "threads", po::value(&threads)->default_value(0),
-      "images detected in parallel (0: one per hardware thread)");
+      "images detected in parallel (0: one per hardware thread)")(
+      "no-track", po::bool_switch(),
+      "detect the board in every image on its own instead of tracking it through the camera's "
+      "images (docs/targets.md)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
 
@@ -122,6 +125,7 @@ int RunDetect(int argc, char** argv) {
   try {
     DetectorOptions options;
     options.threads = threads;
+    options.track = !cli.vm()["no-track"].as<bool>();
     detector = std::make_unique<Detector>(Board(LoadTargetConfig(target_path)), options);
   } catch (const std::exception& e) {
     return cli.InputError(e.what());

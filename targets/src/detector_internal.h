@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <map>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -51,7 +52,13 @@ TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& 
 void DropTagsOffTheirEdges(const cv::Mat& gray, const Board& board, const DetectorOptions& options,
                            DetectionResult* result);
 
-// detector_aprilgrid.cpp: tags libapriltag missed, found from the board.
+// detector_aprilgrid.cpp: one tag's rules and refinement, a view's last rules, and tags
+// libapriltag missed, found from the board.
+std::optional<RejectReason> AcceptTag(const cv::Mat& gray, double noise_sigma, const Board& board,
+                                      const DetectorOptions& options, int id,
+                                      const std::array<Eigen::Vector2d, 4>& corners,
+                                      std::array<DetectedCorner, 4>* refined);
+void FinishTagView(const DetectorOptions& options, DetectionResult* result);
 void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
                   const DetectorOptions& options, const std::set<int>& excluded,
                   DetectionResult* result);

@@ -143,7 +143,7 @@ std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
                                                          const std::string& data_dir,
                                                          const std::string& out_dir, int threads,
                                                          std::map<std::string, SensorData>* data,
-                                                         const InitLog& log) {
+                                                         const InitLog& log, bool track) {
   std::vector<CameraDetectionSummary> summaries;
   std::unique_ptr<Detector> detector;  // built once, for the first camera that needs it
   for (const SensorConfig& sensor : rig.sensors) {
@@ -157,6 +157,7 @@ std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
       if (!detector) {
         DetectorOptions options;
         options.threads = threads;
+        options.track = track;
         detector = std::make_unique<Detector>(Board(rig.target), options);
       }
       CameraDetectionSummary summary;

@@ -69,11 +69,13 @@ std::vector<CornerObservation> DetectCameraCorners(const SensorConfig& camera,
 // writes them to `out_dir`/<camera>/corners.csv. Cameras with corners are left alone; returns one
 // summary per detected camera (none when every camera has corners). Throws CalibrationInputError
 // (spline_calibrator.h) with InitError's message for a camera whose images are unusable, and
-// std::runtime_error when a corners file cannot be written.
+// std::runtime_error when a corners file cannot be written. `track`: each camera's images (in
+// data.csv's order) tracked as a video (DetectorOptions::track) rather than detected one by one.
 std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
                                                          const std::string& data_dir,
                                                          const std::string& out_dir, int threads,
                                                          std::map<std::string, SensorData>* data,
-                                                         const InitLog& log = LogInitToStderr);
+                                                         const InitLog& log = LogInitToStderr,
+                                                         bool track = true);
 
 }  // namespace ctcal
