@@ -142,7 +142,7 @@ Runs CheckSequence(const char* name, int frames, const std::function<Eigen::Isom
 TEST(BoardTracking, SmoothMotionAsAccurateAsTheFullDetector) {
   const Runs run = CheckSequence("smooth", 40, [](int k) { return Smooth(k, 1.0); });
   // Tracking does the work: libapriltag on the first frame and a few more at most.
-  EXPECT_LE(run.stats.full_detections, 4);
+  EXPECT_LE(run.stats.full_detections, 2);
   for (const DetectionResult& r : run.tracked) {
     EXPECT_TRUE(r.board_found);
     EXPECT_GT(r.model_sigma_px, 0.0);
@@ -159,7 +159,7 @@ TEST(BoardTracking, FastMotionFallsBackWithoutWrongCorners) {
 TEST(BoardTracking, JumpingViewsFallBackWithoutWrongCorners) {
   // Unrelated views: every prediction is far off.
   const Runs run = CheckSequence("jumping", 12, [](int k) { return Smooth(37 * k, 1.0); });
-  EXPECT_GE(run.stats.full_detections, 6);
+  EXPECT_GE(run.stats.full_detections, 10);
 }
 
 TEST(BoardTracking, BoardLeavingTheImage) {
@@ -192,7 +192,9 @@ TEST(BoardTracking, IdsMoveWhileTheJunctionsStay) {
   const Runs run = CheckSequence(
       "ids moved", static_cast<int>(poses.size()),
       [&](int k) { return poses[static_cast<size_t>(k)]; }, 0.15);
-  EXPECT_GE(run.stats.full_detections, 4);  // the first frame and each move
+  // The shift by one tag is the image's shift too: the retry from it tracks the tags at their new
+  // places; the turn needs the full detector. Either way each id is where it is printed.
+  EXPECT_GE(run.stats.full_detections, 3);
 }
 
 TEST(BoardTracking, StaticViewEqualsTheFullDetector) {

@@ -152,6 +152,7 @@ class DetectionPipeline {
     s.unreadable += one.unreadable;
     s.with_board += one.with_board;
     s.corners += one.corners;
+    s.full_detections += one.full_detections;
     for (const auto& [reason, count] : one.rejected)
       s.rejected[reason] += count;
     // Exactly sized: push_back's spare capacity (up to 2x) over a long recording's ~50 000 views

@@ -33,7 +33,7 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
                                                      CameraDetectionSummary* summary) {
   CameraDetectionSummary& s = *summary;
   s.images = images.size();
-  s.unreadable = s.with_board = s.corners = 0;
+  s.unreadable = s.with_board = s.corners = s.full_detections = 0;
   s.rejected.clear();
   s.first_error.clear();
   std::vector<CornerObservation> corners;
@@ -44,6 +44,7 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
         s.first_error = r.error;  // names the file
       continue;
     }
+    s.full_detections += r.full_detection ? 1 : 0;
     for (const TagRejection& rejection : r.rejected)
       ++s.rejected[rejection.reason];
     if (!r.board_found)
@@ -79,10 +80,10 @@ void FinishCameraDetection(CameraDetectionSummary* summary, const InitLog& log) 
   char line[400];
   std::snprintf(line, sizeof line,
                 "%s: %s %zu images, %zu with the board, %.1f corners per view, %zu unreadable, "
-                "%.1f s",
+                "%zu tracked, %.1f s",
                 kStage, camera.c_str(), s.images, s.with_board,
                 static_cast<double>(s.corners) / static_cast<double>(s.with_board), s.unreadable,
-                s.seconds);
+                s.images - s.unreadable - s.full_detections, s.seconds);
   s.summary = line;
   const std::string warning = UnreadableImagesWarning(s);
   if (log) {

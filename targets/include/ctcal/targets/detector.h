@@ -130,6 +130,9 @@ struct DetectionResult {
   // tell) and the model error taken from it, which every corner's sigma includes (px).
   double grid_scatter_px = 0.0;
   double model_sigma_px = 0.0;
+  // The full detector (libapriltag) ran on this image; false: the board was tracked from the
+  // frames before (BoardTracker).
+  bool full_detection = true;
 };
 
 class Detector {

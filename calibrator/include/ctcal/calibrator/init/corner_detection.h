@@ -24,6 +24,7 @@ struct CameraDetectionSummary {
   std::size_t unreadable = 0;  // could not be read or decoded
   std::size_t with_board = 0;  // a valid board observation
   std::size_t corners = 0;
+  std::size_t full_detections = 0;  // images the full detector ran on (the others: tracked)
   std::map<RejectReason, std::size_t> rejected;  // tags (corners, views) dropped, by reason
   std::string first_error;                       // of the first unreadable image
   double seconds = 0.0;                          // wall time of the detection
