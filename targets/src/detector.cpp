@@ -76,20 +76,29 @@ cv::Mat ToGray8(const cv::Mat& image) {
 // Immerkaer's estimate (Fast noise variance estimation, CVIU 1996), made robust to edges by a
 // median: the mask [1 -2 1; -2 4 -2; 1 -2 1] cancels every locally linear intensity, leaving
 // noise of variance 36 sigma^2; the median of its magnitude over the image is 0.6745 * 6 sigma.
+// The mask is applied at every other pixel of every other row (90 000 samples at 752x480): 0.52
+// -> 0.14 ms per image, a tenth of a tracked frame's detection. The median is a whole number
+// (of 0.247 grey levels of sigma), the same as the whole image's on 74 of 76 rendered and real
+// views; on the other two, whose median lies at a step, one step off, the step by which the whole
+// image's estimate moves between frames of one rendered sequence anyway.
 double EstimateNoiseSigma(const cv::Mat& gray) {
   CV_Assert(gray.type() == CV_8UC1);
   if (gray.rows < 3 || gray.cols < 3)
     return 0.0;
-  const cv::Mat mask = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
-  cv::Mat response;
-  cv::filter2D(gray, response, CV_16S, mask);
   std::vector<int64_t> histogram(16 * 255 + 1, 0);
-  for (int v = 1; v + 1 < response.rows; ++v) {
-    const int16_t* row = response.ptr<int16_t>(v);
-    for (int u = 1; u + 1 < response.cols; ++u)
-      ++histogram[static_cast<size_t>(std::abs(row[u]))];
+  int64_t samples = 0;
+  for (int v = 1; v + 1 < gray.rows; v += 2) {
+    const uint8_t* up = gray.ptr<uint8_t>(v - 1);
+    const uint8_t* row = gray.ptr<uint8_t>(v);
+    const uint8_t* down = gray.ptr<uint8_t>(v + 1);
+    for (int u = 1; u + 1 < gray.cols; u += 2) {
+      const int response = up[u - 1] - 2 * up[u] + up[u + 1] - 2 * row[u - 1] + 4 * row[u] -
+                           2 * row[u + 1] + down[u - 1] - 2 * down[u] + down[u + 1];
+      ++histogram[static_cast<size_t>(std::abs(response))];
+      ++samples;
+    }
   }
-  const int64_t half = static_cast<int64_t>(response.rows - 2) * (response.cols - 2) / 2;
+  const int64_t half = samples / 2;
   int64_t count = 0;
   size_t median = 0;
   while (median + 1 < histogram.size() && count + histogram[median] <= half)
