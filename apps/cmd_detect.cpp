@@ -61,6 +61,8 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
               found.with_board > 0 ? static_cast<double>(corners.size()) / found.with_board : 0.0);
   if (found.unreadable > 0)
     std::printf(", %zu unreadable", found.unreadable);
+  if (detector.options().track)
+    std::printf(", %zu tracked", results.size() - found.unreadable - found.full_detections);
   std::printf("\n");
   const std::string warning = UnreadableImagesWarning(found);
   if (!warning.empty())
