@@ -1,5 +1,6 @@
 // Board detection along a video: each frame's tags predicted from the frames before and refined
-// in place, libapriltag only where the prediction fails (docs/targets.md, "Tracking").
+// in place, libapriltag only where the prediction fails (docs/targets.md, "Tracking along a
+// sequence").
 #pragma once
 
 #include <opencv2/core.hpp>
