@@ -30,8 +30,8 @@ struct CameraResults {
 // A bounded queue between the bag's reader (this thread) and the detection workers. Each camera's
 // images go in chunks of DetectorOptions::track_chunk_frames in message order, each tracked by
 // one worker from a full detection (BoardTracker): fixed chunks, so that the corners do not depend
-// on the thread count. The reader waits while a chunk is queued, so memory holds at most the
-// chunks being detected, one queued and one being filled per camera.
+// on the thread count. The reader starts filling a chunk only when no other waits, so memory
+// holds at most the chunks being detected (whose images are freed as they are) and one more.
 class DetectionPipeline {
  public:
   DetectionPipeline(const RigConfig& rig, int threads, bool track, const InitLog& log) : log_(log) {
@@ -56,6 +56,9 @@ class DetectionPipeline {
   // read stops at once.
   void Push(BagImage&& image) {
     std::vector<BagImage>& pending = pending_[image.camera->name];  // the reader's alone
+    // A new chunk is filled only once the queued one is taken: at most one chunk waits.
+    if (pending.empty() && chunk_ > 1)
+      WaitForRoom(0);
     pending.push_back(std::move(image));
     if (pending.size() >= chunk_)
       Enqueue(std::exchange(pending, {}));
@@ -75,11 +78,17 @@ class DetectionPipeline {
   std::map<std::string, CameraResults>& cameras() { return cameras_; }
 
  private:
-  void Enqueue(std::vector<BagImage>&& chunk) {
+  // Waits until at most `queued` chunks are queued; throws a worker's fatal error.
+  std::unique_lock<std::mutex> WaitForRoom(std::size_t queued) {
     std::unique_lock<std::mutex> lock(mutex_);
-    has_room_.wait(lock, [&] { return queue_.size() < capacity_ || fatal_; });
+    has_room_.wait(lock, [&] { return queue_.size() <= queued || fatal_; });
     if (fatal_)
       std::rethrow_exception(fatal_);
+    return lock;
+  }
+
+  void Enqueue(std::vector<BagImage>&& chunk) {
+    std::unique_lock<std::mutex> lock = WaitForRoom(capacity_ - 1);
     queue_.push_back(std::move(chunk));
     has_work_.notify_one();
   }
