@@ -260,7 +260,10 @@ int RunCalibrate(int argc, char** argv) {
       "keyframe-rate", po::value(&discrete_options.keyframe_rate_hz)->default_value(0.0),
       "discrete: keyframe rate in Hz (0: the camera frame times)")(
       "threads", po::value(&options.threads)->default_value(0), "solver threads (0: all cores)")(
-      "autodiff", po::bool_switch(), "residual Jacobians by automatic differentiation")(
+      "no-track", po::bool_switch(),
+      "detect the board in every image on its own instead of tracking it through each camera's "
+      "images (docs/targets.md)")("autodiff", po::bool_switch(),
+                                  "residual Jacobians by automatic differentiation")(
       "per-corner-blocks", po::bool_switch(),
       "one residual block per corner instead of one compressed block per global-shutter frame "
       "(slower; for benchmarks)")(
@@ -330,6 +333,7 @@ int RunCalibrate(int argc, char** argv) {
     return cli.UsageError("--split-frame-rows must be auto, on or off, got " + split_frame_rows);
   if (options.threads < 0)
     return cli.UsageError("--threads must be >= 0");
+  const bool track = !cli.vm()["no-track"].as<bool>();
   if (noise_policy != "estimate" && noise_policy != "stated")
     return cli.UsageError("--noise must be estimate or stated, got " + noise_policy);
   options.estimate_noise = noise_policy == "estimate";
@@ -390,7 +394,8 @@ int RunCalibrate(int argc, char** argv) {
     // A ROS bag is read once, its images detected as they stream (never all in memory), so its
     // cameras arrive with their corners and DetectMissingCorners leaves them alone.
     if (IsRosBag(data_dir))
-      data = LoadBagAndDetect(rig, data_dir, out_dir, options.threads, &warnings, nullptr, log);
+      data =
+          LoadBagAndDetect(rig, data_dir, out_dir, options.threads, &warnings, nullptr, log, track);
     else
       data = LoadDataset(data_dir, rig, &warnings);
     for (const std::string& w : warnings)
@@ -401,7 +406,7 @@ int RunCalibrate(int argc, char** argv) {
   log("time: " + report::FormatStageTime(clock.Lap("load")));
   // Cameras given as images only are detected first; their corners go to OUT/<camera>/.
   if (const auto failed = Guarded(cli, log_file, [&] {
-        DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log);
+        DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log, track);
       }))
     return *failed;
   // A board that looks the same turned (a checkerboard with rows + cols even): each view's corner

@@ -61,6 +61,8 @@ int DetectCamera(const CommandLine& cli, const Detector& detector, const fs::pat
               found.with_board > 0 ? static_cast<double>(corners.size()) / found.with_board : 0.0);
   if (found.unreadable > 0)
     std::printf(", %zu unreadable", found.unreadable);
+  if (detector.options().track)
+    std::printf(", %zu tracked", results.size() - found.unreadable - found.full_detections);
   std::printf("\n");
   const std::string warning = UnreadableImagesWarning(found);
   if (!warning.empty())
@@ -114,7 +116,10 @@ int RunDetect(int argc, char** argv) {
       "camera", po::value(&camera),
       "camera folder name (default: every DATA/cam* folder with a data.csv)")(
       "threads", po::value(&threads)->default_value(0),
-      "images detected in parallel (0: one per hardware thread)");
+      "images detected in parallel (0: one per hardware thread)")(
+      "no-track", po::bool_switch(),
+      "detect the board in every image on its own instead of tracking it through the camera's "
+      "images (docs/targets.md)");
   if (const auto exit_code = cli.Parse(argc, argv))
     return *exit_code;
 
@@ -122,6 +127,7 @@ int RunDetect(int argc, char** argv) {
   try {
     DetectorOptions options;
     options.threads = threads;
+    options.track = !cli.vm()["no-track"].as<bool>();
     detector = std::make_unique<Detector>(Board(LoadTargetConfig(target_path)), options);
   } catch (const std::exception& e) {
     return cli.InputError(e.what());

@@ -1,13 +1,18 @@
 // Board detection and rendering speed, single thread (per core) and two threads: images per second
 // for the AprilGrid detector at 752x480 and 1280x800 (rendered views of the 6x6 grid filling ~half
 // the image, and EuRoC's real image), the checkerboard detector (opencv-doc's left01.jpg), and the
-// renderer's frames per second. Numbers go to docs/performance.md, section "Detection".
+// renderer's frames per second; and a rendered 752x480 video tracked (BoardTracker) against the
+// same frames detected one by one. Numbers go to docs/performance.md, sections "Detection" and
+// "Detection tracking".
 #include <benchmark/benchmark.h>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <filesystem>
+#include <vector>
 
+#include "ctcal/targets/board_tracking.h"
 #include "ctcal/targets/detector.h"
 #include "ctcal/targets/renderer.h"
 
@@ -59,6 +64,61 @@ BENCHMARK(DetectRendered)
     ->Threads(2)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
+
+// 60 frames at 20 Hz of a camera moving over the grid (0.1 m and 0.2 rad amplitudes, 3-10 px
+// between frames), rendered once; decoding is not part of the figures.
+const std::vector<cv::Mat>& Video() {
+  static const std::vector<cv::Mat> frames = [] {
+    const Board board{TargetConfig{}};
+    const BoardRenderer renderer(board, 752, 480, Pinhole(752, 480));
+    std::vector<cv::Mat> out;
+    for (int k = 0; k < 60; ++k) {
+      const double t = k / 20.0;
+      Eigen::Isometry3d T_W_C = View();
+      T_W_C.linear() = T_W_C.linear() *
+                       Eigen::AngleAxisd(0.2 * std::sin(1.1 * t), Eigen::Vector3d::UnitZ()) *
+                       Eigen::AngleAxisd(0.1 * std::sin(0.8 * t), Eigen::Vector3d::UnitY());
+      T_W_C.translation() += Eigen::Vector3d(0.1 * std::sin(1.3 * t), 0.05 * std::cos(t), 0.0);
+      out.push_back(renderer.Render(T_W_C, static_cast<uint64_t>(k)));
+    }
+    return out;
+  }();
+  return frames;
+}
+
+// Images per second of the 60-frame video, tracked from a full detection on its first frame
+// (`state.range(0)` = 1) or every frame detected in full (0).
+void DetectVideo(benchmark::State& state) {
+  const std::vector<cv::Mat>& frames = Video();
+  const Detector detector{Board(TargetConfig{})};
+  size_t corners = 0;
+  int full = 0;
+  for (auto _ : state) {
+    BoardTracker tracker(detector);
+    corners = 0;
+    for (const cv::Mat& image : frames)
+      corners += (state.range(0) ? tracker.Next(image) : detector.Detect(image)).corners.size();
+    full = state.range(0) ? tracker.stats().full_detections : static_cast<int>(frames.size());
+    benchmark::DoNotOptimize(corners);
+  }
+  state.counters["corners_per_frame"] = static_cast<double>(corners) / frames.size();
+  state.counters["full_detections"] = full;
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(frames.size()));
+}
+BENCHMARK(DetectVideo)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The noise estimate every frame needs (EstimateNoiseSigma), alone.
+void NoiseSigma(benchmark::State& state) {
+  const cv::Mat& image = Video().front();
+  double sigma = 0.0;
+  for (auto _ : state) {
+    sigma = EstimateNoiseSigma(image);
+    benchmark::DoNotOptimize(sigma);
+  }
+  state.counters["sigma"] = sigma;
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(NoiseSigma)->Unit(benchmark::kMicrosecond);
 
 void DetectFile(benchmark::State& state, const std::string& path, const TargetConfig& config) {
   if (!std::filesystem::exists(path)) {

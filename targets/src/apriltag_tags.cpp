@@ -187,18 +187,6 @@ bool MissingTagInView(const Board& board, const TagCorners& tags, const cv::Size
   return false;
 }
 
-// Bilinear interpolation of an 8-bit image at (x, y) (pixel centres at integers); -1 outside.
-double SampleBilinear(const cv::Mat& gray, double x, double y) {
-  if (!(x >= 0.0 && y >= 0.0 && x <= gray.cols - 1.0 && y <= gray.rows - 1.0))
-    return -1.0;
-  const int x0 = std::min(static_cast<int>(x), gray.cols - 2);
-  const int y0 = std::min(static_cast<int>(y), gray.rows - 2);
-  const double fx = x - x0, fy = y - y0;
-  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
-  const uint8_t* r1 = gray.ptr<uint8_t>(y0 + 1) + x0;
-  return (1.0 - fy) * ((1.0 - fx) * r0[0] + fx * r0[1]) + fy * ((1.0 - fx) * r1[0] + fx * r1[1]);
-}
-
 // Reads tag `id` at the given corners (tag order) and compares it with what the board prints
 // there: the number of the 36 data bits that differ from Kalibr's code word of `id`, or -1 if
 // the view is no tag of this border width at all (no contrast, or a border ring not black).

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "ctcal/targets/detector.h"
 
@@ -34,6 +35,33 @@ namespace {
 // band of rows or columns within 3 px of it, 40 % of a 12 px window's weight.
 constexpr double kRefineMinBorderPx = 2.0;
 constexpr double kRefineMinMeasuredWeight = 0.25;
+
+// The window's Gaussian weights (sigma (h + 1) / 2), row-major over (2h+1)^2 pixels: computed once
+// per half-width up to kCachedHalf (a view refines a few hundred corners with a few widths).
+constexpr int kCachedHalf = 32;
+std::vector<double> ComputeWeights(int h) {
+  const double weight_sigma = 0.5 * (h + 1);
+  std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
+  for (int dy = -h; dy <= h; ++dy) {
+    for (int dx = -h; dx <= h; ++dx) {
+      weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)] =
+          std::exp(-(dx * dx + dy * dy) / (2.0 * weight_sigma * weight_sigma));
+    }
+  }
+  return weights;
+}
+const std::vector<double>& WindowWeights(int h, std::vector<double>* uncached) {
+  static const std::vector<std::vector<double>> table = [] {
+    std::vector<std::vector<double>> t;
+    for (int k = 0; k <= kCachedHalf; ++k)
+      t.push_back(ComputeWeights(k));
+    return t;
+  }();
+  if (h <= kCachedHalf)
+    return table[static_cast<size_t>(h)];
+  *uncached = ComputeWeights(h);
+  return *uncached;
+}
 }  // namespace
 
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
@@ -51,15 +79,11 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     return false;
   const int h = std::max(1, half_window);
   const int n = 2 * h + 3;  // patch with a one-pixel rim for central differences
-  const double weight_sigma = 0.5 * (h + 1);
-  std::vector<double> weights(static_cast<size_t>((2 * h + 1) * (2 * h + 1)));
+  std::vector<double> uncached;
+  const std::vector<double>& weights = WindowWeights(h, &uncached);
   double weight_sum = 0.0;
-  for (int dy = -h; dy <= h; ++dy) {
-    for (int dx = -h; dx <= h; ++dx) {
-      weight_sum += weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)] =
-          std::exp(-(dx * dx + dy * dy) / (2.0 * weight_sigma * weight_sigma));
-    }
-  }
+  for (double w : weights)
+    weight_sum += w;
   cv::Mat patch;
   // in_image[r * n + c]: the patch sample (r, c) lies in the image (outside, getRectSubPix and the
   // clamped bilinear read repeat the border, which is no measurement).

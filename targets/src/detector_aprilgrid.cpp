@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -157,6 +158,73 @@ void CompleteGrid(const cv::Mat& gray, double noise_sigma, const Board& board,
   }
 }
 
+// Kalibr's rules for one tag and the sub-pixel refinement: its corners (libapriltag's quad, or a
+// tracked prediction) away from the image border, its bits wide enough to refine, each corner
+// refined with the capture window within the jump bound of its start, and the tag still reading
+// as its own code word at the refined corners.
+std::optional<RejectReason> AcceptTag(const cv::Mat& gray, double noise_sigma, const Board& board,
+                                      const DetectorOptions& options, int id,
+                                      const std::array<Eigen::Vector2d, 4>& corners,
+                                      std::array<DetectedCorner, 4>* refined) {
+  const double margin = options.min_border_distance_px;
+  const int border = board.config().black_tag_border;
+  const int cells = Board::kTagDataBits + 2 * border;
+  for (const Eigen::Vector2d& c : corners) {
+    if (c.x() < margin || c.y() < margin || c.x() > gray.cols - 1 - margin ||
+        c.y() > gray.rows - 1 - margin)
+      return RejectReason::kNearBorder;
+  }
+  // The shortest edge sets the scale of the window and of the jump bound: a foreshortened
+  // tag's bits are narrow across it, and the next X-junction is that much closer.
+  double edge = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < 4; ++k)
+    edge = std::min(edge, (corners[k] - corners[(k + 1) % 4]).norm());
+  const double bit_px = edge / cells;
+  if (bit_px < options.min_bit_px)
+    return RejectReason::kTooSmall;
+  // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
+  // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
+  // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
+  const double max_jump = std::max(options.max_refinement_jump_px, 0.8 * bit_px);
+  const std::array<int, 4> ids = board.TagCornerIds(id);
+  std::array<Eigen::Vector2d, 4> uv;
+  for (size_t k = 0; k < 4; ++k) {
+    DetectedCorner& out = (*refined)[k];
+    out.id = ids[k];
+    out.uv = corners[k];
+    out.sigma = options.default_sigma_px;
+    if (!options.refine)
+      continue;
+    double sigma = 0.0;
+    if (!RefineCorner(gray, TagCornerHalfWindow(border, bit_px, kCaptureWindowBorders), &out.uv,
+                      &sigma, noise_sigma) ||
+        (out.uv - corners[k]).norm() > max_jump)
+      return RejectReason::kRefinementJump;
+    out.sigma = sigma;  // noise only; Detect adds the view's model error
+    uv[k] = out.uv;
+  }
+  // A refined corner that landed on another junction shifts the bit grid near it: the tag must
+  // still read as its code word at the refined corners.
+  if (options.refine) {
+    const int distance = TagCodeDistance(gray, uv, board, id);
+    if (distance < 0 || distance > 2)
+      return RejectReason::kRefinementJump;
+  }
+  return std::nullopt;
+}
+
+// The view's last rules: fewer than min_tags tags is no observation; corners sorted by id.
+void FinishTagView(const DetectorOptions& options, DetectionResult* result) {
+  if (result->tags_accepted < options.min_tags) {
+    if (result->tags_accepted > 0)
+      result->rejected.push_back({-1, RejectReason::kTooFewTags});
+    result->corners.clear();
+  }
+  std::sort(result->corners.begin(), result->corners.end(),
+            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
+  result->board_found = !result->corners.empty();
+}
+
 }  // namespace internal
 
 using namespace internal;  // NOLINT(build/namespaces): detector_internal.h's passes
@@ -175,8 +243,6 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
     std::map<int, int> id_count;
     for (const TagDetection& tag : tags)
       ++id_count[tag.id];
-    const double margin = options_.min_border_distance_px;
-    const int cells = Board::kTagDataBits + 2 * board_.config().black_tag_border;
     for (const TagDetection& tag : tags) {
       if (tag.id >= board_.NumTags()) {
         result.rejected.push_back({tag.id, RejectReason::kUnknownId});
@@ -186,60 +252,11 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
         result.rejected.push_back({tag.id, RejectReason::kDuplicateId});
         continue;
       }
-      bool near_border = false;
-      for (const Eigen::Vector2d& c : tag.corners) {
-        near_border |= c.x() < margin || c.y() < margin || c.x() > gray.cols - 1 - margin ||
-                       c.y() > gray.rows - 1 - margin;
-      }
-      if (near_border) {
-        result.rejected.push_back({tag.id, RejectReason::kNearBorder});
-        continue;
-      }
-      // The shortest edge sets the scale of the window and of the jump bound: a foreshortened
-      // tag's bits are narrow across it, and the next X-junction is that much closer.
-      double edge = std::numeric_limits<double>::infinity();
-      for (size_t k = 0; k < 4; ++k)
-        edge = std::min(edge, (tag.corners[k] - tag.corners[(k + 1) % 4]).norm());
-      const double bit_px = edge / cells;
-      if (bit_px < options_.min_bit_px) {
-        result.rejected.push_back({tag.id, RejectReason::kTooSmall});
-        continue;
-      }
-      // libapriltag fits straight edges; under strong distortion (fisheye lenses) a large tag's
-      // edges bend and its quad corners miss the true corner by a few pixels. The next X-junction
-      // is two (narrowest) bits away, so a jump up to 0.8 bit still lands on the right one.
-      const double max_jump = std::max(options_.max_refinement_jump_px, 0.8 * bit_px);
-      const std::array<int, 4> ids = board_.TagCornerIds(tag.id);
       std::array<DetectedCorner, 4> refined;
-      bool ok = true;
-      for (size_t k = 0; k < 4; ++k) {
-        refined[k].id = ids[k];
-        refined[k].uv = tag.corners[k];
-        refined[k].sigma = options_.default_sigma_px;
-        if (!options_.refine)
-          continue;
-        double sigma = 0.0;
-        if (!RefineCorner(gray,
-                          TagCornerHalfWindow(board_.config().black_tag_border, bit_px,
-                                              kCaptureWindowBorders),
-                          &refined[k].uv, &sigma, noise_sigma) ||
-            (refined[k].uv - tag.corners[k]).norm() > max_jump) {
-          ok = false;
-          break;
-        }
-        refined[k].sigma = sigma;  // noise only; Detect adds the view's model error
-      }
-      // A refined corner that landed on another junction shifts the bit grid near it: the tag
-      // must still read as its code word at the refined corners.
-      if (ok && options_.refine) {
-        std::array<Eigen::Vector2d, 4> uv;
-        for (size_t k = 0; k < 4; ++k)
-          uv[k] = refined[k].uv;
-        const int distance = TagCodeDistance(gray, uv, board_, tag.id);
-        ok = distance >= 0 && distance <= 2;
-      }
-      if (!ok) {
-        result.rejected.push_back({tag.id, RejectReason::kRefinementJump});
+      const std::optional<RejectReason> reason =
+          AcceptTag(gray, noise_sigma, board_, options_, tag.id, tag.corners, &refined);
+      if (reason) {
+        result.rejected.push_back({tag.id, *reason});
         continue;
       }
       ++result.tags_accepted;
@@ -309,14 +326,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
   ReleaseTagContext(std::move(context));
   if (options_.refine)
     DropTagsOffTheirEdges(gray, board_, options_, &result);
-  if (result.tags_accepted < options_.min_tags) {
-    if (result.tags_accepted > 0)
-      result.rejected.push_back({-1, RejectReason::kTooFewTags});
-    result.corners.clear();
-  }
-  std::sort(result.corners.begin(), result.corners.end(),
-            [](const DetectedCorner& a, const DetectedCorner& b) { return a.id < b.id; });
-  result.board_found = !result.corners.empty();
+  FinishTagView(options_, &result);
   return result;
 }
 

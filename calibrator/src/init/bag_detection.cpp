@@ -7,9 +7,11 @@
 #include <mutex>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "ctcal/calibrator/init/bag_detection.h"
 #include "ctcal/calibrator/spline_calibrator.h"
+#include "ctcal/targets/board_tracking.h"
 #include "ctcal/targets/detector.h"
 
 namespace ctcal {
@@ -25,16 +27,22 @@ struct CameraResults {
   std::size_t done = 0;
 };
 
-// A bounded queue between the bag's reader (this thread) and the detection workers: the reader
-// waits while `capacity` images are queued, so memory holds at most that many images.
+// A bounded queue between the bag's reader (this thread) and the detection workers. Each camera's
+// images go in chunks of DetectorOptions::track_chunk_frames in message order, each tracked by
+// one worker from a full detection (BoardTracker): fixed chunks, so that the corners do not depend
+// on the thread count. The reader starts filling a chunk only when no other waits, so memory
+// holds at most the chunks being detected (whose images are freed as they are) and one more.
 class DetectionPipeline {
  public:
-  DetectionPipeline(const RigConfig& rig, int threads, const InitLog& log) : log_(log) {
+  DetectionPipeline(const RigConfig& rig, int threads, bool track, const InitLog& log) : log_(log) {
     const int workers = threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
     DetectorOptions options;
     options.threads = workers;
+    options.track = track;
     detector_ = std::make_unique<Detector>(Board(rig.target), options);
-    capacity_ = 2 * static_cast<std::size_t>(workers);
+    // Untracked, single images: a few per worker queued, as many as keep every worker busy.
+    chunk_ = track ? static_cast<std::size_t>(std::max(1, options.track_chunk_frames)) : 1;
+    capacity_ = track ? 1 : 2 * static_cast<std::size_t>(workers);
     for (const SensorConfig& s : rig.sensors) {
       if (s.type == SensorType::kCamera)
         cameras_[s.name].summary.camera = s.name;
@@ -47,16 +55,21 @@ class DetectionPipeline {
   // Called by LoadBagDataset for every image; throws the first worker's fatal error, so that the
   // read stops at once.
   void Push(BagImage&& image) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    has_room_.wait(lock, [&] { return queue_.size() < capacity_ || fatal_; });
-    if (fatal_)
-      std::rethrow_exception(fatal_);
-    queue_.push_back(std::move(image));
-    has_work_.notify_one();
+    std::vector<BagImage>& pending = pending_[image.camera->name];  // the reader's alone
+    // A new chunk is filled only once the queued one is taken: at most one chunk waits.
+    if (pending.empty() && chunk_ > 1)
+      WaitForRoom(0);
+    pending.push_back(std::move(image));
+    if (pending.size() >= chunk_)
+      Enqueue(std::exchange(pending, {}));
   }
 
-  // Waits for the workers; throws a fatal error of theirs.
+  // Detects the last chunks, waits for the workers; throws a fatal error of theirs.
   void Close() {
+    for (auto& [camera, pending] : pending_) {
+      if (!pending.empty())
+        Enqueue(std::exchange(pending, {}));
+    }
     Join();
     if (fatal_)
       std::rethrow_exception(std::exchange(fatal_, nullptr));
@@ -65,6 +78,21 @@ class DetectionPipeline {
   std::map<std::string, CameraResults>& cameras() { return cameras_; }
 
  private:
+  // Waits until at most `queued` chunks are queued; throws a worker's fatal error.
+  std::unique_lock<std::mutex> WaitForRoom(std::size_t queued) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    has_room_.wait(lock, [&] { return queue_.size() <= queued || fatal_; });
+    if (fatal_)
+      std::rethrow_exception(fatal_);
+    return lock;
+  }
+
+  void Enqueue(std::vector<BagImage>&& chunk) {
+    std::unique_lock<std::mutex> lock = WaitForRoom(capacity_ - 1);
+    queue_.push_back(std::move(chunk));
+    has_work_.notify_one();
+  }
+
   void Join() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -78,21 +106,26 @@ class DetectionPipeline {
 
   void Work() {
     for (;;) {
-      BagImage job;
+      std::vector<BagImage> chunk;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         has_work_.wait(lock, [&] { return !queue_.empty() || closed_; });
         if (queue_.empty())
           return;
-        job = std::move(queue_.front());
+        chunk = std::move(queue_.front());
         queue_.pop_front();
         has_room_.notify_one();
       }
-      Detect(job);
+      BoardTracker tracker(*detector_);
+      for (BagImage& job : chunk) {
+        if (!Detect(job, &tracker))
+          break;
+      }
     }
   }
 
-  void Detect(BagImage& job) {
+  // False after a fatal error (the chunk's other images are not detected).
+  bool Detect(BagImage& job, BoardTracker* tracker) {
     const SensorConfig& camera = *job.camera;
     DetectionResult result;
     try {
@@ -104,15 +137,16 @@ class DetectionPipeline {
                             std::to_string(image.rows) + " pixels, the rig's resolution is " +
                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
       }
-      result = detector_->Detect(image);
+      result = detector_->options().track ? tracker->Next(image) : detector_->Detect(image);
     } catch (const InitError&) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!fatal_)
         fatal_ = std::current_exception();
       has_room_.notify_all();
-      return;
+      return false;
     } catch (const std::exception& e) {
       result.error = job.where + ": " + e.what();
+      tracker->Reset();
     }
     CameraDetectionSummary one;
     std::vector<CornerObservation> corners =
@@ -127,6 +161,7 @@ class DetectionPipeline {
     s.unreadable += one.unreadable;
     s.with_board += one.with_board;
     s.corners += one.corners;
+    s.full_detections += one.full_detections;
     for (const auto& [reason, count] : one.rejected)
       s.rejected[reason] += count;
     // Exactly sized: push_back's spare capacity (up to 2x) over a long recording's ~50 000 views
@@ -141,14 +176,17 @@ class DetectionPipeline {
       log_(std::string(kStage) + ": " + camera.name + " " + std::to_string(r.done) + " of " +
            std::to_string(job.total) + " images");
     }
+    return true;
   }
 
   const InitLog& log_;
   std::unique_ptr<Detector> detector_;
+  std::size_t chunk_ = 1;
   std::size_t capacity_ = 2;
   std::mutex mutex_;
   std::condition_variable has_work_, has_room_;
-  std::deque<BagImage> queue_;
+  std::deque<std::vector<BagImage>> queue_;
+  std::map<std::string, std::vector<BagImage>> pending_;  // per camera
   bool closed_ = false;
   std::exception_ptr fatal_;
   std::vector<std::thread> workers_;
@@ -161,10 +199,10 @@ std::map<std::string, SensorData> LoadBagAndDetect(const RigConfig& rig, const s
                                                    const std::string& out_dir, int threads,
                                                    Warnings* warnings,
                                                    std::vector<CameraDetectionSummary>* summaries,
-                                                   const InitLog& log) {
+                                                   const InitLog& log, bool track) {
   const auto start = std::chrono::steady_clock::now();
   std::map<std::string, SensorData> data;
-  DetectionPipeline pipeline(rig, threads, log);
+  DetectionPipeline pipeline(rig, threads, track, log);
   try {
     data = LoadBagDataset(
         path, rig, [&](BagImage&& image) { pipeline.Push(std::move(image)); }, warnings);

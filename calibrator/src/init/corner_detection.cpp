@@ -33,7 +33,7 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
                                                      CameraDetectionSummary* summary) {
   CameraDetectionSummary& s = *summary;
   s.images = images.size();
-  s.unreadable = s.with_board = s.corners = 0;
+  s.unreadable = s.with_board = s.corners = s.full_detections = 0;
   s.rejected.clear();
   s.first_error.clear();
   std::vector<CornerObservation> corners;
@@ -44,6 +44,7 @@ std::vector<CornerObservation> CornersFromDetections(const std::vector<ImageEntr
         s.first_error = r.error;  // names the file
       continue;
     }
+    s.full_detections += r.full_detection ? 1 : 0;
     for (const TagRejection& rejection : r.rejected)
       ++s.rejected[rejection.reason];
     if (!r.board_found)
@@ -79,10 +80,10 @@ void FinishCameraDetection(CameraDetectionSummary* summary, const InitLog& log) 
   char line[400];
   std::snprintf(line, sizeof line,
                 "%s: %s %zu images, %zu with the board, %.1f corners per view, %zu unreadable, "
-                "%.1f s",
+                "%zu tracked, %.1f s",
                 kStage, camera.c_str(), s.images, s.with_board,
                 static_cast<double>(s.corners) / static_cast<double>(s.with_board), s.unreadable,
-                s.seconds);
+                s.images - s.unreadable - s.full_detections, s.seconds);
   s.summary = line;
   const std::string warning = UnreadableImagesWarning(s);
   if (log) {
@@ -143,7 +144,7 @@ std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
                                                          const std::string& data_dir,
                                                          const std::string& out_dir, int threads,
                                                          std::map<std::string, SensorData>* data,
-                                                         const InitLog& log) {
+                                                         const InitLog& log, bool track) {
   std::vector<CameraDetectionSummary> summaries;
   std::unique_ptr<Detector> detector;  // built once, for the first camera that needs it
   for (const SensorConfig& sensor : rig.sensors) {
@@ -157,6 +158,7 @@ std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
       if (!detector) {
         DetectorOptions options;
         options.threads = threads;
+        options.track = track;
         detector = std::make_unique<Detector>(Board(rig.target), options);
       }
       CameraDetectionSummary summary;

@@ -83,8 +83,18 @@ struct DetectorOptions {
   // and, by averaging away the thin bridges between tags and the corner squares, finding more
   // tags on real photos; 1 for 1-bit borders, whose quads lose corners when decimated.
   float quad_decimate = 0.0f;
-  // Worker threads for DetectMany (0 = hardware concurrency).
+  // Worker threads for DetectFiles (0 = hardware concurrency).
   int threads = 0;
+  // Sequences (DetectFiles, the calibrator's bags; AprilGrids): each frame's tags tracked from
+  // the frames before (BoardTracker, board_tracking.h), libapriltag only where that fails. Off:
+  // every image detected on its own, as Detect does.
+  bool track = true;
+  // A sequence is tracked in chunks of this many frames, each from a full detection on one
+  // worker: a fixed length, so that the corners do not depend on the thread count.
+  int track_chunk_frames = 50;
+  // While a tracked frame misses a tag that the board puts inside the image, the full detector
+  // runs at most every this many frames (tags coming into view apart from the tracked ones).
+  int track_redetect_frames = 10;
 };
 
 enum class RejectReason {
@@ -120,6 +130,9 @@ struct DetectionResult {
   // tell) and the model error taken from it, which every corner's sigma includes (px).
   double grid_scatter_px = 0.0;
   double model_sigma_px = 0.0;
+  // The full detector (libapriltag) ran on this image; false: the board was tracked from the
+  // frames before (BoardTracker).
+  bool full_detection = true;
 };
 
 class Detector {
@@ -135,7 +148,8 @@ class Detector {
   // Any of CV_8U / CV_16U with 1, 3 or 4 channels (colour is BGR/BGRA as cv::imread gives it).
   // Thread-safe: concurrent calls use separate libapriltag detectors.
   DetectionResult Detect(const cv::Mat& image) const;
-  // Reads every file (cv::IMREAD_UNCHANGED) and detects, `options().threads` images at a time;
+  // Reads every file (cv::IMREAD_UNCHANGED) and detects, `options().threads` images at a time
+  // (with `options().track`: the files are one camera's frames in time order, tracked in chunks);
   // result i belongs to paths[i] whatever the thread schedule. `progress(done, total)` is called
   // from one thread at a time.
   std::vector<DetectionResult> DetectFiles(
@@ -143,10 +157,16 @@ class Detector {
       const std::function<void(size_t, size_t)>& progress = nullptr) const;
 
  private:
+  friend class BoardTracker;
   struct TagContext;
   std::unique_ptr<TagContext> AcquireTagContext() const;
   void ReleaseTagContext(std::unique_ptr<TagContext> context) const;
-  // noise_sigma: the image's noise (grey levels), for the corners' sigma.
+  // The 8-bit grey image and its noise sigma (grey levels, for the corners' sigma); false when the
+  // image is no view (result->error set for an unusable one).
+  bool PrepareGray(const cv::Mat& image, cv::Mat* gray, double* noise_sigma,
+                   DetectionResult* result) const;
+  // A found board's last steps: the final refinement (and rectified one), the model error.
+  void FinishView(const cv::Mat& gray, double noise_sigma, DetectionResult* result) const;
   DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCharuco(const cv::Mat& gray, double noise_sigma) const;

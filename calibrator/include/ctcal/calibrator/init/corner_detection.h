@@ -24,6 +24,7 @@ struct CameraDetectionSummary {
   std::size_t unreadable = 0;  // could not be read or decoded
   std::size_t with_board = 0;  // a valid board observation
   std::size_t corners = 0;
+  std::size_t full_detections = 0;  // images the full detector ran on (the others: tracked)
   std::map<RejectReason, std::size_t> rejected;  // tags (corners, views) dropped, by reason
   std::string first_error;                       // of the first unreadable image
   double seconds = 0.0;                          // wall time of the detection
@@ -69,11 +70,13 @@ std::vector<CornerObservation> DetectCameraCorners(const SensorConfig& camera,
 // writes them to `out_dir`/<camera>/corners.csv. Cameras with corners are left alone; returns one
 // summary per detected camera (none when every camera has corners). Throws CalibrationInputError
 // (spline_calibrator.h) with InitError's message for a camera whose images are unusable, and
-// std::runtime_error when a corners file cannot be written.
+// std::runtime_error when a corners file cannot be written. `track`: each camera's images (in
+// data.csv's order) tracked as a video (DetectorOptions::track) rather than detected one by one.
 std::vector<CameraDetectionSummary> DetectMissingCorners(const RigConfig& rig,
                                                          const std::string& data_dir,
                                                          const std::string& out_dir, int threads,
                                                          std::map<std::string, SensorData>* data,
-                                                         const InitLog& log = LogInitToStderr);
+                                                         const InitLog& log = LogInitToStderr,
+                                                         bool track = true);
 
 }  // namespace ctcal
