@@ -101,15 +101,6 @@ void NormalEquations::Release() {
   G_ = Eigen::MatrixXd();
 }
 
-void NormalEquations::AddValues(const NormalEquations& other) {
-  if (other.H_nn_.nonZeros() != H_nn_.nonZeros() || other.n_ != n_ || other.c_ != c_)
-    throw std::logic_error("normal equations: adding values of another pattern");
-  Eigen::Map<Eigen::VectorXd>(H_nn_.valuePtr(), H_nn_.nonZeros()) +=
-      Eigen::Map<const Eigen::VectorXd>(other.H_nn_.valuePtr(), other.H_nn_.nonZeros());
-  H_nc_ += other.H_nc_;
-  H_cc_ += other.H_cc_;
-}
-
 Eigen::VectorXd NormalEquations::Diagonal() const {
   Eigen::VectorXd d(n_ + c_);
   for (int i = 0; i < n_; ++i)

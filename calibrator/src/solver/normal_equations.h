@@ -67,8 +67,6 @@ class NormalEquations {
 
   // Every value 0 (the pattern kept).
   void SetZero();
-  // Adds the values of `other`, built on the same pattern (a thread's partial sum).
-  void AddValues(const NormalEquations& other);
 
   // The diagonal of H (n + c values).
   Eigen::VectorXd Diagonal() const;
