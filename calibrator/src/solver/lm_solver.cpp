@@ -125,7 +125,7 @@ class LevenbergMarquardt::Impl {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
     const std::size_t h = static_cast<std::size_t>(H_->NonZeros()) * 12 + (n * c + c * c) * 8;
     // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
-    // of H_nn, and its right-hand sides and solutions (SolveStep: 8 border columns at a time).
+    // of H_nn, and its right-hand sides and solutions (SolveStep: kSchurColumns at a time).
     return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
            static_cast<std::size_t>(H_->NonZeros()) * 12 + 2 * n * (kSchurColumns + 1) * 8;
   }
@@ -395,11 +395,11 @@ void LevenbergMarquardt::Impl::PartitionBlocks(int nuisance_blocks) {
 }
 
 // The cost at the values in the parameter blocks' memory (without the fixed cost) and, with
-// `jacobian`, H = J^T J and g = J^T r there. Without `jacobian` thread t takes the chunks t, t + T,
-// t + 2T, ... of kChunk residual blocks; with it, its share of PartitionBlocks. The partial sums
-// are added in thread order: the same sums for the same thread count, whatever the schedule.
+// `jacobian`, H = J^T J and g = J^T r there. Thread t takes its share of PartitionBlocks, then
+// thread 0 the blocks that straddle two shares; the partial sums are added in thread order: the
+// same sums for the same thread count whatever the schedule, and the same cost with or without
+// `jacobian` (the step's acceptance compares the two).
 bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
-  constexpr std::size_t kChunk = 64;
   const std::size_t T = static_cast<std::size_t>(threads_);
   std::vector<double> costs(T, 0.0);
   std::vector<char> ok(T, 1);
@@ -430,21 +430,13 @@ bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
   if (jacobian)
     H_->SetZero();
   ParallelFor(threads_, T, [&](std::size_t t) {
-    if (!jacobian) {
-      for (std::size_t first = t * kChunk; first < blocks_.size(); first += T * kChunk) {
-        for (std::size_t i = first; i < std::min(first + kChunk, blocks_.size()); ++i) {
-          if (!add(t, i, nullptr)) {
-            ok[t] = 0;
-            return;
-          }
-        }
-      }
-      return;
+    Eigen::MatrixXd* H_cc = nullptr;
+    if (jacobian) {
+      H_cc = t == 0 ? &H_->H_cc() : &partial_cc_[t - 1];
+      if (t > 0)
+        H_cc->setZero(H_->c(), H_->c());
+      g[t].setZero(g_.size());
     }
-    Eigen::MatrixXd* H_cc = t == 0 ? &H_->H_cc() : &partial_cc_[t - 1];
-    if (t > 0)
-      H_cc->setZero(H_->c(), H_->c());
-    g[t].setZero(g_.size());
     for (const std::size_t i : thread_blocks_[t]) {
       if (!add(t, i, H_cc)) {
         ok[t] = 0;
@@ -452,9 +444,9 @@ bool LevenbergMarquardt::Impl::Evaluate(bool jacobian, double* cost) {
       }
     }
   });
-  if (jacobian && ok[0]) {
+  if (ok[0]) {
     for (const std::size_t i : shared_blocks_) {
-      if (!add(0, i, &H_->H_cc())) {
+      if (!add(0, i, jacobian ? &H_->H_cc() : nullptr)) {
         ok[0] = 0;
         break;
       }
