@@ -87,7 +87,7 @@ DetectionResult BoardTracker::Track(const cv::Mat& gray, double noise_sigma,
 DetectionResult BoardTracker::Next(const cv::Mat& image) {
   ++stats_.frames;
   const DetectorOptions& options = detector_.options();
-  if (detector_.board().type() != TargetType::kAprilGrid || !options.refine) {
+  if (!options.track || detector_.board().type() != TargetType::kAprilGrid || !options.refine) {
     ++stats_.full_detections;
     return detector_.Detect(image);
   }

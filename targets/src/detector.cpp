@@ -297,7 +297,7 @@ std::vector<DetectionResult> Detector::DetectFiles(
           results[i].error = "cannot read image " + paths[i];
           tracker.Reset();
         } else {
-          results[i] = options_.track ? tracker.Next(image) : Detect(image);
+          results[i] = tracker.Next(image);
           results[i].image_width = image.cols;
           results[i].image_height = image.rows;
           if (!results[i].error.empty())

@@ -137,7 +137,7 @@ class DetectionPipeline {
                             std::to_string(image.rows) + " pixels, the rig's resolution is " +
                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
       }
-      result = detector_->options().track ? tracker->Next(image) : detector_->Detect(image);
+      result = tracker->Next(image);
     } catch (const InitError&) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!fatal_)

@@ -30,8 +30,9 @@ struct TrackingStats {
 // (phase correlation). The full detector runs on the first frame, after a frame without the
 // board, when that fails too, and every track_redetect_frames frames while a tag the board puts
 // inside the image is missing.
-// Checkerboards and ChArUco boards, and DetectorOptions::refine off, run the full detector on
-// every frame. Not thread-safe; one tracker per sequence (the Detector may be shared).
+// Checkerboards and ChArUco boards, DetectorOptions::track off and DetectorOptions::refine off
+// run the full detector on every frame. Not thread-safe; one tracker per sequence (the Detector may
+// be shared).
 class BoardTracker {
  public:
   explicit BoardTracker(const Detector& detector) : detector_(detector) {}
