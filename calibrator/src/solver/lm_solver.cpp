@@ -6,7 +6,6 @@
 #include <ceres/manifold.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -21,6 +20,7 @@
 #include "ctcal/sensors/parallel_for.h"
 #include "normal_equations.h"
 #include "parameter_order.h"
+#include "sparse_cholesky.h"
 
 namespace ctcal {
 namespace {
@@ -165,8 +165,8 @@ class LevenbergMarquardt::Impl {
   Eigen::VectorXd g_;  // J^T r at the current point
   double fixed_cost_ = 0.0;
   int num_residuals_ = 0;
-  std::size_t jacobian_values_ = 0;  // rows x tangent columns over the residual blocks
-  std::unique_ptr<Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower>> llt_;
+  std::size_t jacobian_values_ = 0;      // rows x tangent columns over the residual blocks
+  std::unique_ptr<SparseCholesky> llt_;  // of the damped H_nn, kept for the solve's steps
   std::vector<double*> border_;
   bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
 };
@@ -529,23 +529,14 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   step->resize(n + c);
   // A_nn^-1 applied to dense columns (false when the factorisation or the result is not finite).
   const auto solve_nn = [&](const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
-    *X = llt_->solve(B);
-    return llt_->info() == Eigen::Success && X->allFinite();
+    return llt_->Solve(B, X);
   };
   Eigen::VectorXd y_g;  // A_nn^-1 g_n
   Eigen::MatrixXd S;    // the Schur complement on the border
   if (n > 0) {
-    NormalEquations::SparseColMajor A = H_->H_nn();
-    for (int i = 0; i < n; ++i)
-      A.valuePtr()[A.outerIndexPtr()[i]] += D(i);  // the diagonal leads its column
-    if (llt_ == nullptr) {
-      llt_ = std::make_unique<
-          Eigen::CholmodSupernodalLLT<NormalEquations::SparseColMajor, Eigen::Lower>>();
-      llt_->cholmod().print = 0;  // a failure is an invalid step, handled by the caller
-      llt_->analyzePattern(A);
-    }
-    llt_->factorize(A);
-    if (llt_->info() != Eigen::Success)
+    if (llt_ == nullptr)
+      llt_ = std::make_unique<SparseCholesky>();
+    if (!llt_->Factorize(H_->H_nn(), D))  // A_nn = H_nn + D's first n
       return false;
     // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time (g_n with the first): A_nn^-1
     // H_nc whole (n x c, and once more as the solve's right-hand side) was the solver's largest

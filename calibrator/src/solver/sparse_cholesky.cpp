@@ -1,0 +1,199 @@
+#include "sparse_cholesky.h"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+namespace ctcal {
+namespace {
+
+// A cholmod_sparse header over compressed columns held elsewhere (nothing is copied).
+cholmod_sparse View(int n, const int* col_start, const int* row_index, const double* values,
+                    bool sorted) {
+  cholmod_sparse s{};
+  s.nrow = s.ncol = static_cast<std::size_t>(n);
+  s.nzmax = static_cast<std::size_t>(col_start[n]);
+  s.p = const_cast<int*>(col_start);
+  s.i = const_cast<int*>(row_index);
+  s.x = const_cast<double*>(values);
+  s.stype = -1;  // the lower triangle
+  s.itype = CHOLMOD_INT;
+  s.xtype = CHOLMOD_REAL;
+  s.dtype = CHOLMOD_DOUBLE;
+  s.sorted = sorted ? 1 : 0;
+  s.packed = 1;
+  return s;
+}
+
+}  // namespace
+
+struct SparseCholesky::Impl {
+  Impl() {
+    cholmod_start(&common_);
+    common_.print = 0;  // a failure is an invalid step, handled by the caller
+  }
+  ~Impl() {
+    cholmod_free_factor(&factor_, &common_);
+    cholmod_free_dense(&x_, &common_);
+    cholmod_free_dense(&y_, &common_);
+    cholmod_free_dense(&e_, &common_);
+    cholmod_finish(&common_);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  void Analyze(const SparseColMajor& lower);
+  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
+  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X);
+
+  cholmod_common common_;
+  cholmod_factor* factor_ = nullptr;
+  cholmod_dense* x_ = nullptr;  // cholmod_solve2's result and workspaces, kept between solves
+  cholmod_dense* y_ = nullptr;
+  cholmod_dense* e_ = nullptr;
+  std::vector<int> perm_;  // new index -> H_nn's index (CHOLMOD's ordering)
+  // tril(P A P^T) in compressed columns; entry k of H_nn's lower triangle lands at target_[k].
+  std::vector<int> col_start_, row_index_, target_;
+  std::vector<double> values_;
+  std::vector<double> rhs_;  // B in the new order, column-major
+};
+
+SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::~SparseCholesky() = default;
+
+bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
+  return impl_->Factorize(lower, d);
+}
+
+bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
+  return impl_->Solve(B, X);
+}
+
+void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
+  if (!lower.isCompressed())
+    throw std::logic_error("SparseCholesky: the matrix must be in compressed form");
+  const int n = static_cast<int>(lower.cols());
+  const int* p = lower.outerIndexPtr();
+  const int* rows = lower.innerIndexPtr();
+  const auto nnz = static_cast<std::size_t>(p[n]);
+
+  // CHOLMOD's own choice of order (AMD, or METIS where that fills less) with its postordering,
+  // analysed on H_nn's pattern as given.
+  {
+    const cholmod_sparse a = View(n, p, rows, lower.valuePtr(), false);
+    cholmod_factor* order = cholmod_analyze(const_cast<cholmod_sparse*>(&a), &common_);
+    if (order == nullptr)
+      throw std::runtime_error("SparseCholesky: CHOLMOD could not order the normal equations");
+    const int* perm = static_cast<const int*>(order->Perm);
+    perm_.assign(perm, perm + n);
+    cholmod_free_factor(&order, &common_);
+  }
+  std::vector<int> position(static_cast<std::size_t>(n));  // H_nn's index -> new index
+  for (int q = 0; q < n; ++q)
+    position[static_cast<std::size_t>(perm_[static_cast<std::size_t>(q)])] = q;
+
+  // Entry k of H_nn, (i, j) with i >= j, goes to (max, min) of (position[i], position[j]). Two
+  // counting sorts, by the new row and then stably by the new column, leave every column's rows
+  // ascending as CHOLMOD wants them, in O(nnz).
+  std::vector<int> new_row(nnz), new_col(nnz);
+  for (int j = 0; j < n; ++j) {
+    for (int k = p[j]; k < p[j + 1]; ++k) {
+      const int a = position[static_cast<std::size_t>(rows[k])];
+      const int b = position[static_cast<std::size_t>(j)];
+      new_row[static_cast<std::size_t>(k)] = std::max(a, b);
+      new_col[static_cast<std::size_t>(k)] = std::min(a, b);
+    }
+  }
+  const auto counting_order = [&](const std::vector<int>& key, const std::vector<int>& in) {
+    std::vector<int> start(static_cast<std::size_t>(n) + 1, 0);
+    for (const int k : in)
+      ++start[static_cast<std::size_t>(key[static_cast<std::size_t>(k)]) + 1];
+    for (int i = 0; i < n; ++i)
+      start[static_cast<std::size_t>(i) + 1] += start[static_cast<std::size_t>(i)];
+    std::vector<int> out(in.size());
+    for (const int k : in)
+      out[static_cast<std::size_t>(
+          start[static_cast<std::size_t>(key[static_cast<std::size_t>(k)])]++)] = k;
+    return out;
+  };
+  std::vector<int> entries(nnz);
+  for (std::size_t k = 0; k < nnz; ++k)
+    entries[k] = static_cast<int>(k);
+  const std::vector<int> by_column = counting_order(new_col, counting_order(new_row, entries));
+
+  col_start_.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (std::size_t k = 0; k < nnz; ++k)
+    ++col_start_[static_cast<std::size_t>(new_col[k]) + 1];
+  for (int j = 0; j < n; ++j)
+    col_start_[static_cast<std::size_t>(j) + 1] += col_start_[static_cast<std::size_t>(j)];
+  row_index_.resize(nnz);
+  target_.resize(nnz);
+  for (std::size_t at = 0; at < nnz; ++at) {
+    const auto k = static_cast<std::size_t>(by_column[at]);
+    row_index_[at] = new_row[k];
+    target_[k] = static_cast<int>(at);
+  }
+  values_.assign(nnz, 0.0);
+
+  // The symbolic factorisation of the permuted pattern in its given order: no permutation left
+  // for factorize to apply (and none to postorder: the order above is postordered already).
+  common_.nmethods = 1;
+  common_.method[0].ordering = CHOLMOD_NATURAL;
+  common_.postorder = 0;
+  common_.supernodal = CHOLMOD_SUPERNODAL;
+  common_.final_asis = 1;
+  const cholmod_sparse a = View(n, col_start_.data(), row_index_.data(), values_.data(), true);
+  factor_ = cholmod_analyze(const_cast<cholmod_sparse*>(&a), &common_);
+  if (factor_ == nullptr)
+    throw std::runtime_error("SparseCholesky: CHOLMOD could not analyse the normal equations");
+}
+
+bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
+  if (factor_ == nullptr)
+    Analyze(lower);
+  const int n = static_cast<int>(lower.cols());
+  const int* p = lower.outerIndexPtr();
+  const int* rows = lower.innerIndexPtr();
+  const double* v = lower.valuePtr();
+  for (int j = 0; j < n; ++j) {
+    for (int k = p[j]; k < p[j + 1]; ++k)
+      values_[static_cast<std::size_t>(target_[static_cast<std::size_t>(k)])] =
+          v[k] + (rows[k] == j ? d(j) : 0.0);
+  }
+  const cholmod_sparse a = View(n, col_start_.data(), row_index_.data(), values_.data(), true);
+  if (!cholmod_factorize(const_cast<cholmod_sparse*>(&a), factor_, &common_))
+    return false;
+  // Not positive definite is a warning to CHOLMOD (status > 0, the factor stops at `minor`).
+  return common_.status == CHOLMOD_OK && factor_->minor == static_cast<std::size_t>(n);
+}
+
+bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
+  const auto n = static_cast<std::size_t>(B.rows());
+  const auto k = static_cast<std::size_t>(B.cols());
+  rhs_.resize(n * k);
+  for (std::size_t c = 0; c < k; ++c) {
+    for (std::size_t q = 0; q < n; ++q)
+      rhs_[c * n + q] = B(perm_[q], static_cast<Eigen::Index>(c));
+  }
+  cholmod_dense b{};
+  b.nrow = n;
+  b.ncol = k;
+  b.nzmax = n * k;
+  b.d = n;
+  b.x = rhs_.data();
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &x_, nullptr, &y_, &e_, &common_))
+    return false;
+  const double* x = static_cast<const double*>(x_->x);
+  X->resize(B.rows(), B.cols());
+  for (std::size_t c = 0; c < k; ++c) {
+    for (std::size_t q = 0; q < n; ++q)
+      (*X)(perm_[q], static_cast<Eigen::Index>(c)) = x[c * x_->d + q];
+  }
+  return X->allFinite();
+}
+
+}  // namespace ctcal

@@ -1,0 +1,42 @@
+// The Levenberg-Marquardt step's factorisation of the nuisance block A = H_nn + D (lm_solver.cpp):
+// CHOLMOD's supernodal LL^T, with the matrix handed over already in its fill-reducing order.
+//
+// Why not Eigen's CholmodSupernodalLLT: given a lower triangle and its own ordering, CHOLMOD's
+// factorize transposes the matrix twice per call to reach tril(P A P^T) (cholmod_factorize.c), and
+// the caller first copied H_nn to add the damping: three fresh copies of H_nn per step, and their
+// pages faulted in anew every time (EuRoC's 36 s: a quarter of the run's page faults, and ~5 % of
+// its CPU in the transposes). Here the order is computed once (CHOLMOD's AMD with its
+// postordering), the permuted lower pattern is built once with a map from H_nn's entries to its
+// own, and each step scatters H_nn + D into it; CHOLMOD, told the order is natural, factors it in
+// place. The solves reuse their workspace (cholmod_solve2).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+
+namespace ctcal {
+
+class SparseCholesky {
+ public:
+  using SparseColMajor = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  // Factors A + diag(d.head(n)) from A's lower triangle (n x n, every column's diagonal entry
+  // present; d may be longer). The first call fixes the pattern: later calls must pass the same
+  // one. False when the matrix is not positive definite (or CHOLMOD fails).
+  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
+
+  // X = (A + diag(d))^-1 B with the last factorisation. False when the result is not finite.
+  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X);
+
+ private:
+  struct Impl;  // CHOLMOD's state (cholmod.h stays out of this header)
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ctcal

@@ -1,0 +1,100 @@
+// The Levenberg-Marquardt step's sparse Cholesky (calibrator/src/solver/sparse_cholesky.h): on a
+// matrix shaped like H_nn (a block band of trajectory knots, coupled to a few bias blocks over
+// long stretches), every solve agrees with a dense LL^T of the same damped matrix, again after
+// refactorising the same pattern with new values and damping, and a matrix that is not positive
+// definite is refused.
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <random>
+#include <vector>
+
+#include "../../../calibrator/src/solver/sparse_cholesky.h"
+
+namespace ctcal {
+namespace {
+
+using SparseColMajor = SparseCholesky::SparseColMajor;
+
+// Random J (rows touching 4 consecutive knot blocks of 6 and one of 4 bias blocks of 6, by time),
+// J^T J's lower triangle in compressed columns, the diagonal first in every column as H_nn holds
+// it. `scale` changes the values, not the pattern.
+SparseColMajor BandWithBiases(int knots, std::mt19937* rng, double scale) {
+  const int biases = 4, n = 6 * (knots + biases);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k + 4 <= knots; ++k) {
+    const int bias = knots + (k * biases) / knots;
+    std::vector<int> cols;
+    for (int c = 6 * k; c < 6 * (k + 4); ++c)
+      cols.push_back(c);
+    for (int c = 6 * bias; c < 6 * (bias + 1); ++c)
+      cols.push_back(c);
+    Eigen::MatrixXd J(12, static_cast<int>(cols.size()));
+    for (int r = 0; r < J.rows(); ++r)
+      for (int c = 0; c < J.cols(); ++c)
+        J(r, c) = scale * normal(*rng);
+    const Eigen::MatrixXd JtJ = J.transpose() * J;
+    for (std::size_t a = 0; a < cols.size(); ++a)
+      for (std::size_t b = 0; b < cols.size(); ++b)
+        H(cols[a], cols[b]) += JtJ(static_cast<int>(a), static_cast<int>(b));
+  }
+  std::vector<Eigen::Triplet<double>> lower;
+  for (int j = 0; j < n; ++j)
+    for (int i = j; i < n; ++i)
+      if (i == j || H(i, j) != 0.0)
+        lower.emplace_back(i, j, H(i, j));
+  SparseColMajor A(n, n);
+  A.setFromTriplets(lower.begin(), lower.end());
+  A.makeCompressed();
+  return A;
+}
+
+Eigen::MatrixXd Dense(const SparseColMajor& lower, const Eigen::VectorXd& d) {
+  const Eigen::MatrixXd L = Eigen::MatrixXd(lower);
+  Eigen::MatrixXd A = L + L.transpose();
+  A.diagonal() = L.diagonal() + d.head(lower.rows());
+  return A;
+}
+
+TEST(SparseCholesky, SolvesAgreeWithDenseCholeskyAcrossRefactorisations) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const int knots = 40;
+  SparseCholesky chol;
+  for (int round = 0; round < 3; ++round) {
+    std::mt19937 pattern_rng(11);  // the same pattern every round, other values
+    SparseColMajor A = BandWithBiases(knots, &pattern_rng, 1.0);
+    for (int k = 0; k < A.nonZeros(); ++k)
+      A.valuePtr()[k] *= 1.0 + 0.3 * round;
+    // The damping vector is longer than A, as the solver's (the border's entries follow).
+    Eigen::VectorXd d = Eigen::VectorXd::Constant(A.rows() + 5, 1e-3 * (round + 1));
+    ASSERT_TRUE(chol.Factorize(A, d)) << "round " << round;
+    const Eigen::MatrixXd dense = Dense(A, d);
+    Eigen::MatrixXd B(A.rows(), 3);
+    for (int i = 0; i < B.size(); ++i)
+      B.data()[i] = normal(rng);
+    Eigen::MatrixXd X;
+    ASSERT_TRUE(chol.Solve(B, &X));
+    const Eigen::MatrixXd expected = dense.llt().solve(B);
+    EXPECT_LE((X - expected).norm(), 1e-9 * expected.norm()) << "round " << round;
+    EXPECT_LE((dense * X - B).norm(), 1e-9 * B.norm()) << "round " << round;
+  }
+}
+
+TEST(SparseCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
+  std::mt19937 rng(3);
+  SparseColMajor A = BandWithBiases(20, &rng, 1.0);
+  SparseCholesky chol;
+  const Eigen::VectorXd small = Eigen::VectorXd::Constant(A.rows(), 1e-6);
+  ASSERT_TRUE(chol.Factorize(A, small));
+  // A negative damping larger than the smallest eigenvalue leaves an indefinite matrix.
+  const double lowest = Dense(A, small).selfadjointView<Eigen::Lower>().eigenvalues().minCoeff();
+  EXPECT_FALSE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), -(lowest + 1.0))));
+  // And the same pattern factors again once it is positive definite.
+  EXPECT_TRUE(chol.Factorize(A, small));
+}
+
+}  // namespace
+}  // namespace ctcal
