@@ -95,8 +95,8 @@ void ApplyLoss(const ceres::LossFunction& loss, int rows, double* r, RowMatrix* 
 }
 
 // Border columns per solve of the Schur complement (SolveStep): each solve reads the whole factor,
-// each column costs 2 x 8 bytes per nuisance parameter.
-constexpr int kSchurColumns = 16;
+// each column costs 5 x 8 bytes per nuisance parameter (NormalEquationsBytes).
+constexpr int kSchurColumns = 8;
 
 }  // namespace
 
@@ -125,9 +125,11 @@ class LevenbergMarquardt::Impl {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
     const std::size_t h = static_cast<std::size_t>(H_->NonZeros()) * 12 + (n * c + c * c) * 8;
     // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
-    // of H_nn, and its right-hand sides and solutions (SolveStep: kSchurColumns at a time).
+    // of H_nn in the factorisation's order with its map (SparseCholesky), and its right-hand
+    // sides and solutions (SolveStep: kSchurColumns at a time; B and Y, and SparseCholesky's
+    // permuted B, result and workspace).
     return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
-           static_cast<std::size_t>(H_->NonZeros()) * 12 + 2 * n * (kSchurColumns + 1) * 8;
+           static_cast<std::size_t>(H_->NonZeros()) * 16 + 5 * n * (kSchurColumns + 1) * 8;
   }
   std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
   std::size_t CeresBytes() const {
@@ -582,6 +584,8 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
       step->head(n) = -d_n;
     }
   }
+  if (llt_ != nullptr)
+    llt_->ReleaseSolveWorkspace();
   return step->allFinite();
 }
 

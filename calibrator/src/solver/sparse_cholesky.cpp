@@ -71,6 +71,13 @@ bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
   return impl_->Solve(B, X);
 }
 
+void SparseCholesky::ReleaseSolveWorkspace() {
+  cholmod_free_dense(&impl_->x_, &impl_->common_);
+  cholmod_free_dense(&impl_->y_, &impl_->common_);
+  cholmod_free_dense(&impl_->e_, &impl_->common_);
+  std::vector<double>().swap(impl_->rhs_);
+}
+
 void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   if (!lower.isCompressed())
     throw std::logic_error("SparseCholesky: the matrix must be in compressed form");

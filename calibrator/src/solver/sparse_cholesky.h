@@ -34,6 +34,10 @@ class SparseCholesky {
   // X = (A + diag(d))^-1 B with the last factorisation. False when the result is not finite.
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X);
 
+  // Frees the solves' workspace (n x columns, ~3 copies of B) until the next Solve: it would
+  // otherwise sit beside the next Jacobian pass, the solve's memory peak.
+  void ReleaseSolveWorkspace();
+
  private:
   struct Impl;  // CHOLMOD's state (cholmod.h stays out of this header)
   std::unique_ptr<Impl> impl_;
