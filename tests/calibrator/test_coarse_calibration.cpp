@@ -17,7 +17,10 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
+#include "ctcal/calibrator/calibration_state.h"
+#include "ctcal/calibrator/init/coarse_init.h"
 #include "ctcal/calibrator/spline_calibrator.h"
 #include "ctcal/sensors/compare.h"
 #include "ctcal/sensors/dataset.h"
@@ -67,6 +70,32 @@ TEST(CoarseCalibration, DefaultRigFromCoarseGuess) {
     ASSERT_TRUE(res.rms_whitened.has_value()) << name;
     EXPECT_NEAR(*res.rms_whitened, 1.0, 0.1) << name;
   }
+}
+
+// The cameras' intrinsics are fitted side by side on 2 threads (coarse_init.cpp): the same log
+// lines in the same order, and the same bits in every camera's parameters, as on 1 thread.
+TEST(CoarseCalibration, CamerasFittedSideBySideGiveTheSameInitialisation) {
+  const test::Recording l =
+      test::LoadRecording(Simulate("default", "--scenario full --seed 21 --duration 12"));
+  std::vector<std::string> lines[2];
+  std::vector<Eigen::VectorXd> params[2];
+  for (int t = 0; t < 2; ++t) {
+    CalibrationState state(l.rig);
+    CoarseInitOptions options;
+    options.threads = t + 1;
+    InitializeFromData(&state, l.data, options, [&](const std::string& line) {
+      if (line.find("done in") == std::string::npos)  // its times differ
+        lines[t].push_back(line);
+    });
+    for (const auto& sp : state.sensors()) {
+      if (sp->config.type == SensorType::kCamera)
+        params[t].push_back(sp->camera->params());
+    }
+  }
+  EXPECT_EQ(lines[0], lines[1]);
+  ASSERT_EQ(params[0].size(), 2u);
+  for (std::size_t i = 0; i < params[0].size(); ++i)
+    EXPECT_TRUE((params[0][i].array() == params[1][i].array()).all()) << "camera " << i;
 }
 
 // Offsets of -80 ms (auxiliary IMU) and +80 ms (camera): the correlation finds them, the
