@@ -21,6 +21,7 @@
 #include "normal_equations.h"
 #include "parameter_order.h"
 #include "sparse_cholesky.h"
+#include "thread_shares.h"
 
 namespace ctcal {
 namespace {
@@ -125,12 +126,19 @@ class LevenbergMarquardt::Impl {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
     const std::size_t h = static_cast<std::size_t>(H_->NonZeros()) * 12 + (n * c + c * c) * 8;
     // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
-    // of H_nn in the factorisation's order with its map (SparseCholesky), and its right-hand
-    // sides and solutions (SolveStep: kSchurColumns at a time; B and Y, and SparseCholesky's
-    // permuted B, result and workspace).
+    // of H_nn in the factorisation's order with its map (SparseCholesky), and each thread's
+    // right-hand sides and solutions (SolveStep: kSchurColumns at a time; B and Y, and
+    // SparseCholesky's permuted B, result and workspace).
     return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
-           static_cast<std::size_t>(H_->NonZeros()) * 16 + 5 * n * (kSchurColumns + 1) * 8;
+           static_cast<std::size_t>(H_->NonZeros()) * 16 +
+           static_cast<std::size_t>(SolvingThreads()) * 5 * n *
+               static_cast<std::size_t>(ColumnsPerSolve() + 1) * 8;
   }
+  // SolveStep's threads and border columns per solve: kSchurColumns in flight over the threads,
+  // so the step's memory does not grow with them (the own solver's choice against Ceres is by
+  // memory).
+  int SolvingThreads() const { return std::max(1, std::min(threads_, (H_->c() + 1) / 2)); }
+  int ColumnsPerSolve() const { return std::max(2, kSchurColumns / SolvingThreads()); }
   std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
   std::size_t CeresBytes() const {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
@@ -326,74 +334,21 @@ bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scra
   return true;
 }
 
-// The threads' shares of the assembly of H = J^T J. Every thread adds into the one H (a copy of H
-// per thread was the solver's largest memory, ~20 MB per thread on EuRoC's 36 s), so no two
-// threads may write the same nuisance block's column of H_nn or row of H_nc at once. The nuisance
-// blocks are cut into `threads_` ranges of a position: a residual block's key is its first
-// nuisance block (the problem's order: the trajectory's knots in time), a nuisance block's
-// position the smallest key of the residual blocks that read it (a bias knot: the first sample of
-// its support), and the cuts put equal work (rows x columns^2) below each key. A residual block
-// whose nuisance blocks all lie in one range is that thread's; one that straddles a cut (a few
-// knots' worth of corners and samples, and the samples whose bias knots began before the cut) is
-// assembled after the threads, in its order. The result depends only on the thread count.
+// The threads' shares of the assembly of H = J^T J (thread_shares.h), the work of a block taken as
+// rows x columns^2 (its J_b^T J_b). The result depends only on the thread count.
 void LevenbergMarquardt::Impl::PartitionBlocks(int nuisance_blocks) {
-  const std::size_t T = static_cast<std::size_t>(threads_);
-  thread_blocks_.assign(T, {});
-  shared_blocks_.clear();
-  constexpr int kNone = std::numeric_limits<int>::max();
-  std::vector<int> key(blocks_.size(), kNone);
+  std::vector<std::vector<int>> nuisance_of(blocks_.size());
+  std::vector<double> work(blocks_.size());
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     for (const NormalEquations::Run& run : blocks_[i].runs) {
       if (run.block < nuisance_blocks)
-        key[i] = std::min(key[i], run.block);
+        nuisance_of[i].push_back(run.block);
     }
+    work[i] = static_cast<double>(blocks_[i].rows) * blocks_[i].cols * blocks_[i].cols;
   }
-  std::vector<int> position(static_cast<std::size_t>(nuisance_blocks), kNone);
-  for (std::size_t i = 0; i < blocks_.size(); ++i) {
-    for (const NormalEquations::Run& run : blocks_[i].runs) {
-      if (run.block < nuisance_blocks)
-        position[static_cast<std::size_t>(run.block)] =
-            std::min(position[static_cast<std::size_t>(run.block)], key[i]);
-    }
-  }
-  // Work per key, then the cuts: cut[t] is the first key of thread t's range.
-  std::vector<double> work(static_cast<std::size_t>(nuisance_blocks) + 1, 0.0);
-  double total = 0.0;
-  for (std::size_t i = 0; i < blocks_.size(); ++i) {
-    const double w = static_cast<double>(blocks_[i].rows) * blocks_[i].cols * blocks_[i].cols;
-    work[key[i] == kNone ? work.size() - 1 : static_cast<std::size_t>(key[i])] += w;
-    total += w;
-  }
-  std::vector<int> cut(T + 1, 0);
-  cut[T] = kNone;
-  double sum = 0.0;
-  std::size_t t = 1;
-  for (int k = 0; k < nuisance_blocks && t < T; ++k) {
-    sum += work[static_cast<std::size_t>(k)];
-    while (t < T && sum >= total * static_cast<double>(t) / static_cast<double>(T))
-      cut[t++] = k + 1;
-  }
-  for (; t < T; ++t)
-    cut[t] = nuisance_blocks;
-  for (std::size_t i = 0; i < blocks_.size(); ++i) {
-    if (key[i] == kNone) {  // no nuisance block: H_cc and g_c only, the thread's own
-      thread_blocks_[i % T].push_back(i);
-      continue;
-    }
-    int lo = kNone, hi = 0;
-    for (const NormalEquations::Run& run : blocks_[i].runs) {
-      if (run.block < nuisance_blocks) {
-        lo = std::min(lo, position[static_cast<std::size_t>(run.block)]);
-        hi = std::max(hi, position[static_cast<std::size_t>(run.block)]);
-      }
-    }
-    const auto range =
-        static_cast<std::size_t>(std::upper_bound(cut.begin(), cut.end(), lo) - cut.begin() - 1);
-    if (hi < cut[range + 1])
-      thread_blocks_[range].push_back(i);
-    else
-      shared_blocks_.push_back(i);
-  }
+  ThreadShares shares = ShareBlocks(nuisance_of, work, nuisance_blocks, threads_);
+  thread_blocks_ = std::move(shares.own);
+  shared_blocks_ = std::move(shares.shared);
 }
 
 // The cost at the values in the parameter blocks' memory (without the fixed cost) and, with
@@ -529,10 +484,6 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   Eigen::VectorXd D = H_->Diagonal().cwiseMax(o_.min_lm_diagonal).cwiseMin(o_.max_lm_diagonal);
   D /= radius;
   step->resize(n + c);
-  // A_nn^-1 applied to dense columns (false when the factorisation or the result is not finite).
-  const auto solve_nn = [&](const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
-    return llt_->Solve(B, X);
-  };
   Eigen::VectorXd y_g;  // A_nn^-1 g_n
   Eigen::MatrixXd S;    // the Schur complement on the border
   if (n > 0) {
@@ -543,23 +494,38 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time (g_n with the first): A_nn^-1
     // H_nc whole (n x c, and once more as the solve's right-hand side) was the solver's largest
     // block after H (EuRoC's 36 s: 2 x 9 MB), for one more single-column solve for d_n below.
-    constexpr int kColumns = kSchurColumns;
+    // The chunks go round the threads (the demo rig's 97 border columns were ~3/4 of its step on
+    // one thread); each chunk is solved and subtracted alike on any thread, so S does not depend
+    // on the thread count.
     S = H_->H_cc();
-    Eigen::MatrixXd B, Y;
-    for (int j = 0; j == 0 || j < c; j += kColumns) {
-      const int w = std::min(kColumns, c - j);
-      const int g_col = j == 0 ? 1 : 0;
-      B.resize(n, w + g_col);
-      B.leftCols(w) = H_->H_nc().middleCols(j, w);
-      if (g_col)
-        B.col(w) = g_.head(n);
-      if (!solve_nn(B, &Y))
-        return false;
-      if (w > 0)
-        S.middleCols(j, w).noalias() -= H_->H_nc().transpose() * Y.leftCols(w);
-      if (g_col)
-        y_g = Y.col(w);
-    }
+    const int T = SolvingThreads();
+    const int columns = ColumnsPerSolve();
+    const int chunks = std::max(1, (c + columns - 1) / columns);
+    std::vector<SparseCholesky::Workspace> workspaces(static_cast<std::size_t>(T - 1));
+    std::vector<char> solved(static_cast<std::size_t>(T), 1);
+    ParallelFor(T, static_cast<std::size_t>(T), [&](std::size_t t) {
+      Eigen::MatrixXd B, Y;
+      for (int chunk = static_cast<int>(t); chunk < chunks; chunk += T) {
+        const int j = chunk * columns;
+        const int w = std::min(columns, c - j);
+        const int g_col = j == 0 ? 1 : 0;
+        B.resize(n, w + g_col);
+        B.leftCols(w) = H_->H_nc().middleCols(j, w);
+        if (g_col)
+          B.col(w) = g_.head(n);
+        const bool ok = t == 0 ? llt_->Solve(B, &Y) : llt_->Solve(B, &Y, &workspaces[t - 1]);
+        if (!ok) {
+          solved[t] = 0;
+          return;
+        }
+        if (w > 0)
+          S.middleCols(j, w).noalias() -= H_->H_nc().transpose() * Y.leftCols(w);
+        if (g_col)
+          y_g = Y.col(w);
+      }
+    });
+    if (std::find(solved.begin(), solved.end(), 0) != solved.end())
+      return false;
   }
   if (c > 0) {
     if (n == 0)
@@ -579,7 +545,7 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
       step->head(n) = -y_g;
     } else {
       Eigen::MatrixXd d_n;
-      if (!solve_nn(g_.head(n) + H_->H_nc() * step->tail(c), &d_n))
+      if (!llt_->Solve(g_.head(n) + H_->H_nc() * step->tail(c), &d_n))
         return false;
       step->head(n) = -d_n;
     }

@@ -29,6 +29,38 @@ cholmod_sparse View(int n, const int* col_start, const int* row_index, const dou
 
 }  // namespace
 
+struct SparseCholesky::Workspace::Impl {
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;
+  }
+  ~Impl() {
+    Release();
+    cholmod_finish(&common);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  void Release() {
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    std::vector<double>().swap(rhs);
+  }
+
+  // Its own: cholmod_solve2 allocates through it and counts into it.
+  cholmod_common common;
+  cholmod_dense* x = nullptr;  // cholmod_solve2's result and workspaces, kept between solves
+  cholmod_dense* y = nullptr;
+  cholmod_dense* e = nullptr;
+  std::vector<double> rhs;  // B in the new order, column-major
+};
+
+SparseCholesky::Workspace::Workspace() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::Workspace::~Workspace() = default;
+void SparseCholesky::Workspace::Release() {
+  impl_->Release();
+}
+
 struct SparseCholesky::Impl {
   Impl() {
     cholmod_start(&common_);
@@ -36,9 +68,6 @@ struct SparseCholesky::Impl {
   }
   ~Impl() {
     cholmod_free_factor(&factor_, &common_);
-    cholmod_free_dense(&x_, &common_);
-    cholmod_free_dense(&y_, &common_);
-    cholmod_free_dense(&e_, &common_);
     cholmod_finish(&common_);
   }
   Impl(const Impl&) = delete;
@@ -46,18 +75,15 @@ struct SparseCholesky::Impl {
 
   void Analyze(const SparseColMajor& lower);
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
-  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X);
+  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
 
   cholmod_common common_;
   cholmod_factor* factor_ = nullptr;
-  cholmod_dense* x_ = nullptr;  // cholmod_solve2's result and workspaces, kept between solves
-  cholmod_dense* y_ = nullptr;
-  cholmod_dense* e_ = nullptr;
   std::vector<int> perm_;  // new index -> H_nn's index (CHOLMOD's ordering)
   // tril(P A P^T) in compressed columns; entry k of H_nn's lower triangle lands at target_[k].
   std::vector<int> col_start_, row_index_, target_;
   std::vector<double> values_;
-  std::vector<double> rhs_;  // B in the new order, column-major
+  Workspace solve_;  // of Solve(B, X)
 };
 
 SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
@@ -68,14 +94,16 @@ bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorX
 }
 
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
-  return impl_->Solve(B, X);
+  return impl_->Solve(B, X, impl_->solve_.impl_.get());
+}
+
+bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
+                           Workspace* workspace) const {
+  return impl_->Solve(B, X, workspace->impl_.get());
 }
 
 void SparseCholesky::ReleaseSolveWorkspace() {
-  cholmod_free_dense(&impl_->x_, &impl_->common_);
-  cholmod_free_dense(&impl_->y_, &impl_->common_);
-  cholmod_free_dense(&impl_->e_, &impl_->common_);
-  std::vector<double>().swap(impl_->rhs_);
+  impl_->solve_.Release();
 }
 
 void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
@@ -176,29 +204,31 @@ bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::V
   return common_.status == CHOLMOD_OK && factor_->minor == static_cast<std::size_t>(n);
 }
 
-bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
+bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
+                                 Workspace::Impl* w) const {
   const auto n = static_cast<std::size_t>(B.rows());
   const auto k = static_cast<std::size_t>(B.cols());
-  rhs_.resize(n * k);
+  w->rhs.resize(n * k);
   for (std::size_t c = 0; c < k; ++c) {
     for (std::size_t q = 0; q < n; ++q)
-      rhs_[c * n + q] = B(perm_[q], static_cast<Eigen::Index>(c));
+      w->rhs[c * n + q] = B(perm_[q], static_cast<Eigen::Index>(c));
   }
   cholmod_dense b{};
   b.nrow = n;
   b.ncol = k;
   b.nzmax = n * k;
   b.d = n;
-  b.x = rhs_.data();
+  b.x = w->rhs.data();
   b.xtype = CHOLMOD_REAL;
   b.dtype = CHOLMOD_DOUBLE;
-  if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &x_, nullptr, &y_, &e_, &common_))
+  // The factor is only read (CHOLMOD_A on a supernodal LL^T): several workspaces may solve at once.
+  if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
     return false;
-  const double* x = static_cast<const double*>(x_->x);
+  const double* x = static_cast<const double*>(w->x->x);
   X->resize(B.rows(), B.cols());
   for (std::size_t c = 0; c < k; ++c) {
     for (std::size_t q = 0; q < n; ++q)
-      (*X)(perm_[q], static_cast<Eigen::Index>(c)) = x[c * x_->d + q];
+      (*X)(perm_[q], static_cast<Eigen::Index>(c)) = x[c * w->x->d + q];
   }
   return X->allFinite();
 }

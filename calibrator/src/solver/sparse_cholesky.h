@@ -8,7 +8,7 @@
 // its CPU in the transposes). Here the order is computed once (CHOLMOD's AMD with its
 // postordering), the permuted lower pattern is built once with a map from H_nn's entries to its
 // own, and each step scatters H_nn + D into it; CHOLMOD, told the order is natural, factors it in
-// place. The solves reuse their workspace (cholmod_solve2).
+// place. The solves reuse their workspace (cholmod_solve2), one per thread.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,8 +31,27 @@ class SparseCholesky {
   // one. False when the matrix is not positive definite (or CHOLMOD fails).
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
 
+  // The buffers of one solve at a time (B and X in the factor's order, CHOLMOD's workspace and
+  // its own cholmod_common): one per thread that solves.
+  class Workspace {
+   public:
+    Workspace();
+    ~Workspace();
+    Workspace(const Workspace&) = delete;
+    Workspace& operator=(const Workspace&) = delete;
+    void Release();  // frees the buffers until the next solve
+
+   private:
+    friend class SparseCholesky;
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+  };
+
   // X = (A + diag(d))^-1 B with the last factorisation. False when the result is not finite.
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X);
+  // The same in `workspace`: solves with distinct workspaces may run on several threads at once
+  // (the factor is only read).
+  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace* workspace) const;
 
   // Frees the solves' workspace (n x columns, ~3 copies of B) until the next Solve: it would
   // otherwise sit beside the next Jacobian pass, the solve's memory peak.

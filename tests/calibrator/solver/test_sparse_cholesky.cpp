@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "../../../calibrator/src/solver/sparse_cholesky.h"
@@ -81,6 +82,42 @@ TEST(SparseCholesky, SolvesAgreeWithDenseCholeskyAcrossRefactorisations) {
     EXPECT_LE((X - expected).norm(), 1e-9 * expected.norm()) << "round " << round;
     EXPECT_LE((dense * X - B).norm(), 1e-9 * B.norm()) << "round " << round;
   }
+}
+
+// The step solves its border columns on several threads, each with its own workspace: every
+// thread's solve gives the bits the one-workspace Solve gives, the factor shared.
+TEST(SparseCholesky, SolvesOnSeveralThreadsGiveTheSameBits) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const SparseColMajor A = BandWithBiases(300, &rng, 1.0);
+  SparseCholesky chol;
+  ASSERT_TRUE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), 1e-3)));
+  constexpr int kThreads = 4, kRounds = 20;
+  std::vector<Eigen::MatrixXd> B(kThreads), expected(kThreads);
+  for (int t = 0; t < kThreads; ++t) {
+    B[t].resize(A.rows(), 8 + t);
+    for (int i = 0; i < B[t].size(); ++i)
+      B[t].data()[i] = normal(rng);
+    ASSERT_TRUE(chol.Solve(B[t], &expected[t]));
+  }
+  std::vector<int> same(kThreads, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      SparseCholesky::Workspace workspace;
+      Eigen::MatrixXd X;
+      for (int round = 0; round < kRounds; ++round) {
+        if (chol.Solve(B[t], &X, &workspace) && X == expected[t])
+          ++same[t];
+        if (round % 5 == 4)
+          workspace.Release();
+      }
+    });
+  }
+  for (std::thread& th : threads)
+    th.join();
+  for (int t = 0; t < kThreads; ++t)
+    EXPECT_EQ(same[t], kRounds) << "thread " << t;
 }
 
 TEST(SparseCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
