@@ -357,6 +357,7 @@ class SplineProblem {
   // Destroys the problem (its residual blocks); the values stay in the spline and the state.
   void ReleaseProblem() {
     solver_.reset();
+    factorisation_.reset();
     problem_.reset();
   }
 
@@ -510,6 +511,8 @@ class SplineProblem {
   Spline spline_;
   std::unique_ptr<ceres::Problem> problem_;
   std::unique_ptr<LevenbergMarquardt> solver_;  // of the last solve (lm_solver)
+  // The solves' factorisation: the robust and final solve and the covariance share its analysis.
+  std::shared_ptr<NuisanceFactorisation> factorisation_;
   std::vector<ParameterBlockInfo> blocks_;
   std::vector<std::vector<double>> prior_center_;
   std::vector<std::pair<std::string, std::vector<ceres::ResidualBlockId>>> inertial_ids_;

@@ -46,8 +46,11 @@ ceres::Solver::Summary SplineProblem<N, Rep>::Solve() {
       if (b.estimated)
         border.push_back(b.values);
     }
+    if (factorisation_ == nullptr)
+      factorisation_ = MakeNuisanceFactorisation();
     solver_ = std::make_unique<LevenbergMarquardt>(
-        so, border, problem_.get(), point_in_memory_used_ ? &point_in_memory_ : nullptr);
+        so, border, problem_.get(), point_in_memory_used_ ? &point_in_memory_ : nullptr,
+        factorisation_);
     // The solver that holds less: long recordings' compressed inertial blocks span many knots,
     // and their band can exceed Ceres' Jacobian and J^T J together (10 min at 1 kHz). Since the
     // threads share one H (lm_solver.cpp PartitionBlocks), EuRoC's 36 s (34 MB against 49 MB)

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "ctcal/sensors/parallel_for.h"
@@ -101,11 +102,21 @@ constexpr int kSchurColumns = 8;
 
 }  // namespace
 
+class NuisanceFactorisation {
+ public:
+  SparseCholesky chol;            // its analysis of the last solve's pattern
+  std::vector<double*> nuisance;  // the last solve's nuisance blocks, in column order
+};
+
 class LevenbergMarquardt::Impl {
  public:
   Impl(const ceres::Solver::Options& options, const std::vector<double*>& border,
-       ceres::Problem* problem, ceres::EvaluationCallback* point_callback)
-      : o_(options), problem_(*problem), point_callback_(point_callback) {
+       ceres::Problem* problem, ceres::EvaluationCallback* point_callback,
+       std::shared_ptr<NuisanceFactorisation> shared)
+      : o_(options),
+        problem_(*problem),
+        point_callback_(point_callback),
+        shared_(std::move(shared)) {
     if (o_.minimizer_type != ceres::TRUST_REGION ||
         o_.trust_region_strategy_type != ceres::LEVENBERG_MARQUARDT)
       throw std::invalid_argument(
@@ -176,7 +187,8 @@ class LevenbergMarquardt::Impl {
   double fixed_cost_ = 0.0;
   int num_residuals_ = 0;
   std::size_t jacobian_values_ = 0;      // rows x tangent columns over the residual blocks
-  std::unique_ptr<SparseCholesky> llt_;  // of the damped H_nn, kept for the solve's steps
+  std::shared_ptr<SparseCholesky> llt_;  // of the damped H_nn, kept for the solve's steps
+  const std::shared_ptr<NuisanceFactorisation> shared_;  // the caller's, or null
   std::vector<double*> border_;
   bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
 };
@@ -224,10 +236,22 @@ void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
     column_of.emplace(p, static_cast<int>(columns_.size()));
     columns_.push_back(std::move(c));
   };
+  std::vector<double*> nuisance_blocks;
   for (double* p : order) {
     if (used.count(p) && !is_border.count(p))
-      add_column(p);
+      nuisance_blocks.push_back(p);
   }
+  if (shared_ != nullptr) {
+    // The last solve's order where the blocks are the same: a deterministic order kept.
+    const std::unordered_set<const double*> now(nuisance_blocks.begin(), nuisance_blocks.end());
+    const std::vector<double*>& last = shared_->nuisance;
+    if (last.size() == now.size() &&
+        std::all_of(last.begin(), last.end(), [&](const double* p) { return now.count(p) > 0; }))
+      nuisance_blocks = last;
+    shared_->nuisance = nuisance_blocks;
+  }
+  for (double* p : nuisance_blocks)
+    add_column(p);
   const int nuisance = static_cast<int>(columns_.size());
   for (double* p : border) {
     if (is_border.count(p) && !column_of.count(p)) {
@@ -488,7 +512,8 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   Eigen::MatrixXd S;    // the Schur complement on the border
   if (n > 0) {
     if (llt_ == nullptr)
-      llt_ = std::make_unique<SparseCholesky>();
+      llt_ = shared_ != nullptr ? std::shared_ptr<SparseCholesky>(shared_, &shared_->chol)
+                                : std::make_shared<SparseCholesky>();
     if (!llt_->Factorize(H_->H_nn(), D))  // A_nn = H_nn + D's first n
       return false;
     // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time (g_n with the first): A_nn^-1
@@ -590,6 +615,8 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     final_point_ = type != ceres::FAILURE && jacobian_at_x;
     partial_cc_.clear();
     scratch_.clear();
+    if (llt_ != nullptr)
+      llt_->ReleaseNumeric();  // a caller's keeps its analysis
     llt_.reset();
     S.termination_type = type;
     S.message = message;
@@ -764,15 +791,17 @@ MarginalInformation LevenbergMarquardt::Impl::MarginalizeToBorder() {
     throw std::logic_error("MarginalizeToBorder: no normal equations at a solve's final point");
   MarginalInformation out;
   out.nuisance_dimension = H_->n();
-  out.information = MarginalizeNuisance(H_.get(), &out.nuisance_damping);
+  out.information = MarginalizeNuisance(H_.get(), &out.nuisance_damping,
+                                        shared_ != nullptr ? &shared_->chol : nullptr);
   H_.reset();
   return out;
 }
 
 LevenbergMarquardt::LevenbergMarquardt(const ceres::Solver::Options& options,
                                        const std::vector<double*>& border, ceres::Problem* problem,
-                                       ceres::EvaluationCallback* point_callback)
-    : impl_(std::make_unique<Impl>(options, border, problem, point_callback)) {}
+                                       ceres::EvaluationCallback* point_callback,
+                                       std::shared_ptr<NuisanceFactorisation> shared)
+    : impl_(std::make_unique<Impl>(options, border, problem, point_callback, std::move(shared))) {}
 LevenbergMarquardt::~LevenbergMarquardt() = default;
 void LevenbergMarquardt::Solve(ceres::Solver::Summary* summary) {
   impl_->Solve(summary);
@@ -791,6 +820,10 @@ std::size_t LevenbergMarquardt::CeresBytes() const {
 }
 MarginalInformation LevenbergMarquardt::MarginalizeToBorder() {
   return impl_->MarginalizeToBorder();
+}
+
+std::shared_ptr<NuisanceFactorisation> MakeNuisanceFactorisation() {
+  return std::make_shared<NuisanceFactorisation>();
 }
 
 void SolveLevenbergMarquardt(const ceres::Solver::Options& options,

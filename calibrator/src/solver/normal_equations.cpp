@@ -1,6 +1,7 @@
 #include "normal_equations.h"
 
-#include <Eigen/CholmodSupport>
+#include "sparse_cholesky.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -211,7 +212,8 @@ void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<
   }
 }
 
-Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping) {
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
+                                    SparseCholesky* factorisation) {
   using SparseColMajor = NormalEquations::SparseColMajor;
   const int n = normal->n(), c = normal->c();
   *nuisance_damping = 0.0;
@@ -264,25 +266,31 @@ Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_da
   double max_diag = 0.0;
   for (int i = 0; i < m; ++i)
     max_diag = std::max(max_diag, H_nn.valuePtr()[H_nn.outerIndexPtr()[i]]);
-  Eigen::CholmodSupernodalLLT<SparseColMajor, Eigen::Lower> llt;
-  // A failed attempt is handled (and reported) by the damping below; CHOLMOD's own message would
-  // only repeat it without context, so it stays silent (print level 0) and info() is checked.
-  llt.cholmod().print = 0;
-  llt.compute(H_nn);
+  SparseCholesky local;
+  SparseCholesky& llt = factorisation != nullptr ? *factorisation : local;
+  // A failed attempt is handled (and reported) by the damping below.
+  bool factored = llt.Factorize(H_nn, Eigen::VectorXd::Zero(m));
   for (const double relative : {1e-12, 1e-9, 1e-6}) {
-    if (llt.info() == Eigen::Success)
+    if (factored)
       break;
-    SparseColMajor damped = H_nn;
-    for (int i = 0; i < m; ++i)
-      damped.valuePtr()[damped.outerIndexPtr()[i]] += relative * std::max(max_diag, 1.0);
-    llt.compute(damped);
+    factored =
+        llt.Factorize(H_nn, Eigen::VectorXd::Constant(m, relative * std::max(max_diag, 1.0)));
     *nuisance_damping = relative;
   }
-  if (llt.info() != Eigen::Success)
+  if (!factored)
     throw std::runtime_error("covariance: the nuisance information cannot be factored");
   H_nn = SparseColMajor();  // the factor holds what the solve needs
-  const Eigen::MatrixXd X = llt.solve(H_nc);
-  Eigen::MatrixXd information = H_cc - H_nc.transpose() * X;
+  // H_cc - H_cn H_nn^-1 H_nc a few columns at a time: H_nn^-1 H_nc whole is n x c more.
+  constexpr int kColumns = 8;
+  Eigen::MatrixXd information = H_cc, Y;
+  for (int j = 0; j < c; j += kColumns) {
+    const int w = std::min(kColumns, c - j);
+    if (!llt.Solve(H_nc.middleCols(j, w), &Y))
+      throw std::runtime_error("covariance: the nuisance information's solve is not finite");
+    information.middleCols(j, w).noalias() -= H_nc.transpose() * Y;
+  }
+  llt.ReleaseSolveWorkspace();
+  llt.ReleaseNumeric();
   return 0.5 * (information + information.transpose()).eval();
 }
 

@@ -13,6 +13,8 @@
 
 namespace ctcal {
 
+class SparseCholesky;
+
 // The columns are parameter blocks (their tangent spaces): the first `nuisance_blocks` are the
 // nuisance states n (a sparse, banded coupling: the trajectory and bias knots), the rest the
 // border c (coupled to nearly everything: the calibration). H_nn is held as its lower triangle in a
@@ -101,10 +103,13 @@ class NormalEquations {
 };
 
 // The border's information with the nuisance states marginalised, H_cc - H_cn H_nn^-1 H_nc (H_nn
-// factored by CHOLMOD). A nuisance state no residual touches (zero diagonal) is left out exactly;
-// a singular H_nn is damped by 1e-12, 1e-9 or 1e-6 of its largest diagonal, the amount returned
-// in *nuisance_damping (0 when none was needed). Takes H's values over (H is released). Throws
-// std::runtime_error when H_nn cannot be factored even damped.
-Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping);
+// factored by CHOLMOD, SparseCholesky). A nuisance state no residual touches (zero diagonal) is
+// left out exactly; a singular H_nn is damped by 1e-12, 1e-9 or 1e-6 of its largest diagonal, the
+// amount returned in *nuisance_damping (0 when none was needed). Takes H's values over (H is
+// released). Throws std::runtime_error when H_nn cannot be factored even damped. `factorisation`:
+// the one the solve used (its analysis reused when H_nn has its pattern; its values freed
+// afterwards), or null.
+Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
+                                    SparseCholesky* factorisation = nullptr);
 
 }  // namespace ctcal

@@ -34,6 +34,13 @@
 
 namespace ctcal {
 
+// What the solves of one problem's shape share (the robust and final solve of a spline
+// calibration, and its covariance): the nuisance columns' order, and the factorisation's
+// ordering and symbolic analysis of that pattern, computed once; the factor's values are freed
+// at the end of each solve. Opaque (lm_solver.cpp).
+class NuisanceFactorisation;
+std::shared_ptr<NuisanceFactorisation> MakeNuisanceFactorisation();
+
 // One solve, and then the border's marginal information at its final point (the covariance's, from
 // the normal equations the last iteration assembled instead of another pass over the Jacobian).
 class LevenbergMarquardt {
@@ -43,8 +50,13 @@ class LevenbergMarquardt {
   // does not expose it): called before every evaluation pass as Ceres would call it, with the
   // point already in the parameter blocks' memory (residuals such as the inertial row groups
   // identify the evaluation point by its calls).
+  // `shared` (MakeNuisanceFactorisation): kept by the caller across the solves of problems of
+  // one shape. A solve whose nuisance blocks are the last one's takes their column order (the
+  // final solve's problem lists a knot's rotation and translation in another order where a frame
+  // lost outliers), so the factorisation's analysis carries over. Null: the solver's own.
   LevenbergMarquardt(const ceres::Solver::Options& options, const std::vector<double*>& border,
-                     ceres::Problem* problem, ceres::EvaluationCallback* point_callback = nullptr);
+                     ceres::Problem* problem, ceres::EvaluationCallback* point_callback = nullptr,
+                     std::shared_ptr<NuisanceFactorisation> shared = nullptr);
   ~LevenbergMarquardt();
   LevenbergMarquardt(const LevenbergMarquardt&) = delete;
   LevenbergMarquardt& operator=(const LevenbergMarquardt&) = delete;
