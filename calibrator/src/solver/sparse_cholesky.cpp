@@ -103,6 +103,10 @@ void SparseCholesky::ReleaseNumeric() {
   impl_->solve_.Release();
 }
 
+double SparseCholesky::FactorNonZeros() const {
+  return impl_->factor_ == nullptr ? 0.0 : impl_->common_.lnz;
+}
+
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
   return impl_->Solve(B, X, impl_->solve_.impl_.get());
 }

@@ -37,6 +37,9 @@ class SparseCholesky {
   // analysis was a third of each solve's first step on the demo rig).
   void ReleaseNumeric();
 
+  // The factor's entries (its analysis'; 0 before the first Factorize): how much it filled.
+  double FactorNonZeros() const;
+
   // The buffers of one solve at a time (B and X in the factor's order, CHOLMOD's workspace and
   // its own cholmod_common): one per thread that solves.
   class Workspace {

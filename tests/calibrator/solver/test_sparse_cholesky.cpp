@@ -7,6 +7,8 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <random>
 #include <thread>
 #include <vector>
@@ -118,6 +120,60 @@ TEST(SparseCholesky, SolvesOnSeveralThreadsGiveTheSameBits) {
     th.join();
   for (int t = 0; t < kThreads; ++t)
     EXPECT_EQ(same[t], kRounds) << "thread " << t;
+}
+
+// The same band with its rows and columns symmetrically permuted at random: its natural order
+// fills far more than a fill-reducing one.
+SparseColMajor Scrambled(const SparseColMajor& lower, std::mt19937* rng) {
+  const auto n = static_cast<int>(lower.rows());
+  Eigen::VectorXi to(n);
+  for (int i = 0; i < n; ++i)
+    to(i) = i;
+  std::shuffle(to.data(), to.data() + n, *rng);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int j = 0; j < n; ++j) {
+    for (SparseColMajor::InnerIterator it(lower, j); it; ++it) {
+      const int a = to(static_cast<int>(it.row())), b = to(j);
+      entries.emplace_back(std::max(a, b), std::min(a, b), it.value());
+    }
+  }
+  SparseColMajor out(n, n);
+  out.setFromTriplets(entries.begin(), entries.end());
+  out.makeCompressed();
+  return out;
+}
+
+// The spline calibration keeps one factorisation for its robust and final solves and the
+// covariance: the values freed between them, a matrix of another pattern analysed anew, and
+// analysed as well as by a fresh one (CHOLMOD's settings of the previous analysis once left it in
+// natural order).
+TEST(SparseCholesky, KeepsItsAnalysisAcrossReleasesAndReanalysesANewPattern) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const SparseColMajor first = BandWithBiases(60, &rng, 1.0);
+  const SparseColMajor second = Scrambled(BandWithBiases(80, &rng, 1.0), &rng);
+  SparseCholesky kept, fresh;
+  ASSERT_TRUE(fresh.Factorize(second, Eigen::VectorXd::Constant(second.rows(), 1e-3)));
+  for (const SparseColMajor* A : {&first, &first, &second, &second}) {
+    const Eigen::VectorXd d = Eigen::VectorXd::Constant(A->rows(), 2e-3);
+    ASSERT_TRUE(kept.Factorize(*A, d));
+    Eigen::MatrixXd B(A->rows(), 4), X;
+    for (int i = 0; i < B.size(); ++i)
+      B.data()[i] = normal(rng);
+    ASSERT_TRUE(kept.Solve(B, &X));
+    const Eigen::MatrixXd dense = Dense(*A, d);
+    EXPECT_LE((dense * X - B).norm(), 1e-9 * B.norm());
+    kept.ReleaseNumeric();
+  }
+  EXPECT_EQ(kept.FactorNonZeros(), fresh.FactorNonZeros());
+  // And the scrambled order itself would fill several times more: the check has teeth.
+  SparseColMajor damped = second;
+  for (int j = 0; j < damped.outerSize(); ++j)
+    damped.coeffRef(j, j) += 1.0;
+  Eigen::SimplicialLLT<SparseColMajor, Eigen::Lower, Eigen::NaturalOrdering<int>> natural(damped);
+  ASSERT_EQ(natural.info(), Eigen::Success);
+  EXPECT_GT(static_cast<double>(natural.matrixL().nestedExpression().nonZeros()),
+            2.0 * fresh.FactorNonZeros());
 }
 
 TEST(SparseCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
