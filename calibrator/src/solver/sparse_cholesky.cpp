@@ -3,6 +3,7 @@
 #include <cholmod.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -95,16 +96,22 @@ bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorX
 }
 
 void SparseCholesky::ReleaseNumeric() {
-  // A supernodal numeric factor back to its symbolic analysis (cholmod_change_factor keeps the
-  // supernodes and frees the values); the next factorize allocates them again.
-  if (impl_->factor_ != nullptr && impl_->factor_->xtype != CHOLMOD_PATTERN)
-    cholmod_change_factor(CHOLMOD_PATTERN, 1, 1, 1, 1, impl_->factor_, &impl_->common_);
+  // A numeric factor back to its symbolic analysis, supernodal or simplicial as it is
+  // (cholmod_change_factor keeps the supernodes or the column counts and frees the values); the
+  // next factorize allocates them again.
+  cholmod_factor* L = impl_->factor_;
+  if (L != nullptr && L->xtype != CHOLMOD_PATTERN)
+    cholmod_change_factor(CHOLMOD_PATTERN, L->is_ll, L->is_super, 1, 1, L, &impl_->common_);
   std::vector<double>().swap(impl_->values_);
   impl_->solve_.Release();
 }
 
 double SparseCholesky::FactorNonZeros() const {
   return impl_->factor_ == nullptr ? 0.0 : impl_->common_.lnz;
+}
+
+bool SparseCholesky::Supernodal() const {
+  return impl_->factor_ != nullptr && impl_->factor_->is_super;
 }
 
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
@@ -194,8 +201,17 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   common_.nmethods = 1;
   common_.method[0].ordering = CHOLMOD_NATURAL;
   common_.postorder = 0;
-  common_.supernodal = CHOLMOD_SUPERNODAL;
+  // Supernodal or simplicial by CHOLMOD's own switch (flops per entry of L): the trajectory's
+  // band fills little, its supernodes are a knot's 6 columns wide, and BLAS calls on blocks that
+  // small cost more than they save (EuRoC's 36 s: the step's linear solver 0.74 -> 0.46 s with
+  // the simplicial factor CHOLMOD picks). A denser H_nn still gets the supernodal one.
+  common_.supernodal = CHOLMOD_AUTO;
   common_.final_asis = 1;
+  // A simplicial factor's columns exactly as long as their counts: they never grow here (no
+  // updates), and CHOLMOD's default slack (20 % and 5 entries a column) was memory for nothing.
+  common_.grow0 = 1.0;
+  common_.grow1 = 1.0;
+  common_.grow2 = 0;
   const cholmod_sparse a = View(n, col_start_.data(), row_index_.data(), values_.data(), true);
   factor_ = cholmod_analyze(const_cast<cholmod_sparse*>(&a), &common_);
   if (factor_ == nullptr)
@@ -249,7 +265,21 @@ bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::V
   if (!cholmod_factorize(const_cast<cholmod_sparse*>(&a), factor_, &common_))
     return false;
   // Not positive definite is a warning to CHOLMOD (status > 0, the factor stops at `minor`).
-  return common_.status == CHOLMOD_OK && factor_->minor == static_cast<std::size_t>(n);
+  if (common_.status != CHOLMOD_OK || factor_->minor != static_cast<std::size_t>(n))
+    return false;
+  // A simplicial factor is LDL^T, which CHOLMOD completes for an indefinite matrix too (only a
+  // zero pivot stops it); the callers rely on the refusal (a step's invalid damping, the
+  // covariance's singular H_nn). A is positive definite iff every pivot d_j > 0, the pivots LL^T
+  // would take the roots of; D sits on L's unit diagonal (cholmod_core.h).
+  if (!factor_->is_super && !factor_->is_ll) {
+    const int* Lp = static_cast<const int*>(factor_->p);
+    const double* Lx = static_cast<const double*>(factor_->x);
+    for (int j = 0; j < n; ++j) {
+      if (!(Lx[Lp[j]] > 0.0) || !std::isfinite(Lx[Lp[j]]))
+        return false;
+    }
+  }
+  return true;
 }
 
 bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,

@@ -1,5 +1,6 @@
 // The Levenberg-Marquardt step's factorisation of the nuisance block A = H_nn + D (lm_solver.cpp):
-// CHOLMOD's supernodal LL^T, with the matrix handed over already in its fill-reducing order.
+// CHOLMOD's LL^T (supernodal or simplicial, by CHOLMOD's own switch), with the matrix handed over
+// already in its fill-reducing order.
 //
 // Why not Eigen's CholmodSupernodalLLT: given a lower triangle and its own ordering, CHOLMOD's
 // factorize transposes the matrix twice per call to reach tril(P A P^T) (cholmod_factorize.c), and
@@ -37,8 +38,10 @@ class SparseCholesky {
   // analysis was a third of each solve's first step on the demo rig).
   void ReleaseNumeric();
 
-  // The factor's entries (its analysis'; 0 before the first Factorize): how much it filled.
+  // The factor's entries (its analysis'; 0 before the first Factorize): how much it filled, and
+  // whether CHOLMOD chose its supernodal factorisation (else the simplicial one).
   double FactorNonZeros() const;
+  bool Supernodal() const;
 
   // The buffers of one solve at a time (B and X in the factor's order, CHOLMOD's workspace and
   // its own cholmod_common): one per thread that solves.

@@ -86,12 +86,28 @@ TEST(SparseCholesky, SolvesAgreeWithDenseCholeskyAcrossRefactorisations) {
   }
 }
 
+// A dense lower triangle (every entry stored): CHOLMOD's switch takes the supernodal factor.
+SparseColMajor DenseLower(int n, std::mt19937* rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd J(n + 10, n);
+  for (int i = 0; i < J.size(); ++i)
+    J.data()[i] = normal(*rng);
+  const Eigen::MatrixXd H = J.transpose() * J;
+  SparseColMajor A = H.triangularView<Eigen::Lower>().toDenseMatrix().sparseView();
+  A.makeCompressed();
+  return A;
+}
+
+// The band fills little and gets CHOLMOD's simplicial factor (an LDL^T), a dense matrix the
+// supernodal LL^T: both solve, and both refuse an indefinite matrix.
+class SparseCholeskyOf : public ::testing::TestWithParam<bool> {};
+
 // The step solves its border columns on several threads, each with its own workspace: every
 // thread's solve gives the bits the one-workspace Solve gives, the factor shared.
-TEST(SparseCholesky, SolvesOnSeveralThreadsGiveTheSameBits) {
+TEST_P(SparseCholeskyOf, KindSolvesOnSeveralThreadsWithTheSameBits) {
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
-  const SparseColMajor A = BandWithBiases(300, &rng, 1.0);
+  const SparseColMajor A = GetParam() ? DenseLower(200, &rng) : BandWithBiases(300, &rng, 1.0);
   SparseCholesky chol;
   ASSERT_TRUE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), 1e-3)));
   constexpr int kThreads = 4, kRounds = 20;
@@ -176,18 +192,28 @@ TEST(SparseCholesky, KeepsItsAnalysisAcrossReleasesAndReanalysesANewPattern) {
             2.0 * fresh.FactorNonZeros());
 }
 
-TEST(SparseCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
+TEST_P(SparseCholeskyOf, KindSolvesAndRefusesAMatrixThatIsNotPositiveDefinite) {
   std::mt19937 rng(3);
-  SparseColMajor A = BandWithBiases(20, &rng, 1.0);
+  const bool dense = GetParam();
+  const SparseColMajor A = dense ? DenseLower(150, &rng) : BandWithBiases(20, &rng, 1.0);
   SparseCholesky chol;
   const Eigen::VectorXd small = Eigen::VectorXd::Constant(A.rows(), 1e-6);
   ASSERT_TRUE(chol.Factorize(A, small));
+  EXPECT_EQ(chol.Supernodal(), dense);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Ones(A.rows(), 2), X;
+  ASSERT_TRUE(chol.Solve(B, &X));
+  EXPECT_LE((Dense(A, small) * X - B).norm(), 1e-8 * B.norm());
   // A negative damping larger than the smallest eigenvalue leaves an indefinite matrix.
   const double lowest = Dense(A, small).selfadjointView<Eigen::Lower>().eigenvalues().minCoeff();
   EXPECT_FALSE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), -(lowest + 1.0))));
   // And the same pattern factors again once it is positive definite.
   EXPECT_TRUE(chol.Factorize(A, small));
 }
+
+INSTANTIATE_TEST_SUITE_P(, SparseCholeskyOf, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& p) {
+                           return p.param ? "Supernodal" : "Simplicial";
+                         });
 
 }  // namespace
 }  // namespace ctcal
