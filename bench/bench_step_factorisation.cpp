@@ -7,8 +7,9 @@
 //                   session 13): CHOLMOD's own ordering, its factorize transposing the lower
 //                   triangle twice per call.
 //   SparseCholesky: calibrator/src/solver/sparse_cholesky.h: the permuted pattern built once,
-//                   H_nn + D scattered into it, factored in place.
-// Results: docs/performance.md ("Issue 23, session 13").
+//                   H_nn + D scattered into it, factored in place (since session 14 by the
+//                   simplicial factorisation CHOLMOD's switch picks for this band).
+// Results: docs/performance.md ("Issue 23, session 13" and "session 14").
 #include <benchmark/benchmark.h>
 
 #include <Eigen/CholmodSupport>
