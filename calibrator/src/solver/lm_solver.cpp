@@ -148,8 +148,8 @@ class LevenbergMarquardt::Impl {
   // SolveStep's threads and border columns per solve: kSchurColumns in flight over the threads,
   // so the step's memory does not grow with them (the own solver's choice against Ceres is by
   // memory).
-  int SolvingThreads() const { return std::max(1, std::min(threads_, (H_->c() + 1) / 2)); }
-  int ColumnsPerSolve() const { return std::max(2, kSchurColumns / SolvingThreads()); }
+  int SolvingThreads() const { return SchurThreads(threads_, H_->c()); }
+  int ColumnsPerSolve() const { return SchurColumnsPerSolve(threads_, H_->c(), kSchurColumns); }
   std::size_t JacobianBytes() const { return jacobian_values_ * 8; }
   std::size_t CeresBytes() const {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
@@ -516,40 +516,13 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
                                 : std::make_shared<SparseCholesky>();
     if (!llt_->Factorize(H_->H_nn(), D))  // A_nn = H_nn + D's first n
       return false;
-    // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time (g_n with the first): A_nn^-1
-    // H_nc whole (n x c, and once more as the solve's right-hand side) was the solver's largest
-    // block after H (EuRoC's 36 s: 2 x 9 MB), for one more single-column solve for d_n below.
-    // The chunks go round the threads (the demo rig's 97 border columns were ~3/4 of its step on
-    // one thread); each chunk is solved and subtracted alike on any thread, so S does not depend
-    // on the thread count.
+    // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time on the threads (g_n with the
+    // first): A_nn^-1 H_nc whole (n x c, and once more as the solve's right-hand side) was the
+    // solver's largest block after H (EuRoC's 36 s: 2 x 9 MB), for one more single-column solve
+    // for d_n below; on one thread the demo rig's 97 border columns were ~3/4 of its step.
     S = H_->H_cc();
-    const int T = SolvingThreads();
-    const int columns = ColumnsPerSolve();
-    const int chunks = std::max(1, (c + columns - 1) / columns);
-    std::vector<SparseCholesky::Workspace> workspaces(static_cast<std::size_t>(T - 1));
-    std::vector<char> solved(static_cast<std::size_t>(T), 1);
-    ParallelFor(T, static_cast<std::size_t>(T), [&](std::size_t t) {
-      Eigen::MatrixXd B, Y;
-      for (int chunk = static_cast<int>(t); chunk < chunks; chunk += T) {
-        const int j = chunk * columns;
-        const int w = std::min(columns, c - j);
-        const int g_col = j == 0 ? 1 : 0;
-        B.resize(n, w + g_col);
-        B.leftCols(w) = H_->H_nc().middleCols(j, w);
-        if (g_col)
-          B.col(w) = g_.head(n);
-        const bool ok = t == 0 ? llt_->Solve(B, &Y) : llt_->Solve(B, &Y, &workspaces[t - 1]);
-        if (!ok) {
-          solved[t] = 0;
-          return;
-        }
-        if (w > 0)
-          S.middleCols(j, w).noalias() -= H_->H_nc().transpose() * Y.leftCols(w);
-        if (g_col)
-          y_g = Y.col(w);
-      }
-    });
-    if (std::find(solved.begin(), solved.end(), 0) != solved.end())
+    const Eigen::VectorXd g_n = g_.head(n);
+    if (!SubtractBorderSchur(llt_.get(), H_->H_nc(), threads_, kSchurColumns, &g_n, &S, &y_g))
       return false;
   }
   if (c > 0) {
@@ -792,7 +765,7 @@ MarginalInformation LevenbergMarquardt::Impl::MarginalizeToBorder() {
   MarginalInformation out;
   out.nuisance_dimension = H_->n();
   out.information = MarginalizeNuisance(H_.get(), &out.nuisance_damping,
-                                        shared_ != nullptr ? &shared_->chol : nullptr);
+                                        shared_ != nullptr ? &shared_->chol : nullptr, threads_);
   H_.reset();
   return out;
 }

@@ -1,5 +1,6 @@
 #include "normal_equations.h"
 
+#include "ctcal/sensors/parallel_for.h"
 #include "sparse_cholesky.h"
 
 #include <algorithm>
@@ -212,8 +213,50 @@ void NormalEquations::AddBlock(const double* J, int m, int k, const std::vector<
   }
 }
 
+int SchurThreads(int threads, int c) {
+  return std::max(1, std::min(threads, (c + 1) / 2));
+}
+
+int SchurColumnsPerSolve(int threads, int c, int columns_in_flight) {
+  return std::max(2, columns_in_flight / SchurThreads(threads, c));
+}
+
+bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                         int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
+                         Eigen::VectorXd* y_g) {
+  const auto n = static_cast<int>(H_nc.rows()), c = static_cast<int>(H_nc.cols());
+  const int T = SchurThreads(threads, c);
+  const int columns = SchurColumnsPerSolve(threads, c, columns_in_flight);
+  // With g_n: one chunk at least, for g_n alone when there is no border column.
+  const int chunks = std::max(g_n != nullptr ? 1 : 0, (c + columns - 1) / columns);
+  std::vector<SparseCholesky::Workspace> workspaces(static_cast<std::size_t>(T - 1));
+  std::vector<char> solved(static_cast<std::size_t>(T), 1);
+  ParallelFor(T, static_cast<std::size_t>(T), [&](std::size_t t) {
+    Eigen::MatrixXd B, Y;
+    for (int chunk = static_cast<int>(t); chunk < chunks; chunk += T) {
+      const int j = chunk * columns;
+      const int w = std::min(columns, c - j);
+      const int g_col = j == 0 && g_n != nullptr ? 1 : 0;
+      B.resize(n, w + g_col);
+      B.leftCols(w) = H_nc.middleCols(j, w);
+      if (g_col)
+        B.col(w) = *g_n;
+      const bool ok = t == 0 ? llt->Solve(B, &Y) : llt->Solve(B, &Y, &workspaces[t - 1]);
+      if (!ok) {
+        solved[t] = 0;
+        return;
+      }
+      if (w > 0)
+        S->middleCols(j, w).noalias() -= H_nc.transpose() * Y.leftCols(w);
+      if (g_col)
+        *y_g = Y.col(w);
+    }
+  });
+  return std::find(solved.begin(), solved.end(), 0) == solved.end();
+}
+
 Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
-                                    SparseCholesky* factorisation) {
+                                    SparseCholesky* factorisation, int threads) {
   using SparseColMajor = NormalEquations::SparseColMajor;
   const int n = normal->n(), c = normal->c();
   *nuisance_damping = 0.0;
@@ -280,15 +323,10 @@ Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_da
   if (!factored)
     throw std::runtime_error("covariance: the nuisance information cannot be factored");
   H_nn = SparseColMajor();  // the factor holds what the solve needs
-  // H_cc - H_cn H_nn^-1 H_nc a few columns at a time: H_nn^-1 H_nc whole is n x c more.
-  constexpr int kColumns = 8;
-  Eigen::MatrixXd information = H_cc, Y;
-  for (int j = 0; j < c; j += kColumns) {
-    const int w = std::min(kColumns, c - j);
-    if (!llt.Solve(H_nc.middleCols(j, w), &Y))
-      throw std::runtime_error("covariance: the nuisance information's solve is not finite");
-    information.middleCols(j, w).noalias() -= H_nc.transpose() * Y;
-  }
+  // 8 columns in flight, as the solver's step (lm_solver.cpp kSchurColumns).
+  Eigen::MatrixXd information = H_cc;
+  if (!SubtractBorderSchur(&llt, H_nc, threads, 8, nullptr, &information, nullptr))
+    throw std::runtime_error("covariance: the nuisance information's solve is not finite");
   llt.ReleaseSolveWorkspace();
   llt.ReleaseNumeric();
   return 0.5 * (information + information.transpose()).eval();

@@ -109,7 +109,22 @@ class NormalEquations {
 // released). Throws std::runtime_error when H_nn cannot be factored even damped. `factorisation`:
 // the one the solve used (its analysis reused when H_nn has its pattern; its values freed
 // afterwards), or null.
+// `threads` solve its columns (SubtractBorderSchur).
 Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
-                                    SparseCholesky* factorisation = nullptr);
+                                    SparseCholesky* factorisation = nullptr, int threads = 1);
+
+// *S -= H_nc^T A_nn^-1 H_nc with A_nn factored in `llt` (*S holds A_cc on entry: the Schur
+// complement on the border), a few columns at a time: A_nn^-1 H_nc whole would be n x c more.
+// `columns_in_flight` columns are solved at once over all `threads` (each its own workspace), so
+// the memory does not grow with the threads; each chunk is solved and subtracted alike on any
+// thread, so S depends on the thread count (the chunks' width) but not on the schedule. With
+// `g_n`, also *y_g = A_nn^-1 g_n (solved with the first chunk). False when a solve is not finite.
+bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                         int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
+                         Eigen::VectorXd* y_g);
+
+// The threads SubtractBorderSchur uses for `c` border columns, and its columns per solve.
+int SchurThreads(int threads, int c);
+int SchurColumnsPerSolve(int threads, int c, int columns_in_flight);
 
 }  // namespace ctcal
