@@ -96,10 +96,6 @@ void ApplyLoss(const ceres::LossFunction& loss, int rows, double* r, RowMatrix* 
   res *= scaling;
 }
 
-// Border columns per solve of the Schur complement (SolveStep): each solve reads the whole factor,
-// each column costs 5 x 8 bytes per nuisance parameter (NormalEquationsBytes).
-constexpr int kSchurColumns = 8;
-
 }  // namespace
 
 class NuisanceFactorisation {

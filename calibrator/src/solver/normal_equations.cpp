@@ -323,12 +323,10 @@ Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_da
   if (!factored)
     throw std::runtime_error("covariance: the nuisance information cannot be factored");
   H_nn = SparseColMajor();  // the factor holds what the solve needs
-  // 8 columns in flight, as the solver's step (lm_solver.cpp kSchurColumns).
   Eigen::MatrixXd information = H_cc;
-  if (!SubtractBorderSchur(&llt, H_nc, threads, 8, nullptr, &information, nullptr))
+  if (!SubtractBorderSchur(&llt, H_nc, threads, kSchurColumns, nullptr, &information, nullptr))
     throw std::runtime_error("covariance: the nuisance information's solve is not finite");
-  llt.ReleaseSolveWorkspace();
-  llt.ReleaseNumeric();
+  llt.ReleaseNumeric();  // and its solves' workspace
   return 0.5 * (information + information.transpose()).eval();
 }
 

@@ -108,10 +108,15 @@ class NormalEquations {
 // amount returned in *nuisance_damping (0 when none was needed). Takes H's values over (H is
 // released). Throws std::runtime_error when H_nn cannot be factored even damped. `factorisation`:
 // the one the solve used (its analysis reused when H_nn has its pattern; its values freed
-// afterwards), or null.
-// `threads` solve its columns (SubtractBorderSchur).
+// afterwards), or null. `threads` solve its columns (SubtractBorderSchur, kSchurColumns in
+// flight).
 Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
                                     SparseCholesky* factorisation = nullptr, int threads = 1);
+
+// Border columns in flight in the Schur complement's solves (SubtractBorderSchur: the solver's
+// step and the covariance): each solve reads the whole factor, each column costs 5 x 8 bytes per
+// nuisance parameter (LevenbergMarquardt::NormalEquationsBytes).
+constexpr int kSchurColumns = 8;
 
 // *S -= H_nc^T A_nn^-1 H_nc with A_nn factored in `llt` (*S holds A_cc on entry: the Schur
 // complement on the border), a few columns at a time: A_nn^-1 H_nc whole would be n x c more.
@@ -123,7 +128,8 @@ bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int t
                          int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
                          Eigen::VectorXd* y_g);
 
-// The threads SubtractBorderSchur uses for `c` border columns, and its columns per solve.
+// The threads SubtractBorderSchur uses for `c` border columns (no more than one per two columns),
+// and its columns per solve (the columns in flight shared among them, two at least).
 int SchurThreads(int threads, int c);
 int SchurColumnsPerSolve(int threads, int c, int columns_in_flight);
 

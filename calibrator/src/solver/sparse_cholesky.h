@@ -33,7 +33,8 @@ class SparseCholesky {
   // when the matrix is not positive definite (or CHOLMOD fails).
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
 
-  // Frees the factor's values and keeps its analysis for the next Factorize of the same pattern:
+  // Frees the factor's values (and Solve(B, X)'s workspace, as ReleaseSolveWorkspace) and keeps
+  // its analysis for the next Factorize of the same pattern:
   // the spline calibration's robust and final solves and their covariance share one (the
   // analysis was a third of each solve's first step on the demo rig).
   void ReleaseNumeric();
