@@ -1,15 +1,14 @@
 // The own Levenberg-Marquardt step's factorisation and Schur solves of H_nn (lm_solver.cpp
-// SolveStep) on normal equations shaped like EuRoC's 36 s: a 6x6-block band of `knots` trajectory
-// knots (order 4: each row couples 4 consecutive knots) and one 6-block bias knot per second
-// (200 knots at 7 ms), each coupled to the knots of its second; then A^-1 applied to 9 columns
-// (8 border columns and the gradient) as the step does.
-//   Eigen:          Eigen::CholmodSupernodalLLT on a damped copy of H_nn (the step before
-//                   session 13): CHOLMOD's own ordering, its factorize transposing the lower
-//                   triangle twice per call.
+// SolveStep) on normal equations shaped like the calibrations' (ShapedNormalEquations: a band of
+// trajectory knots and the bias splines' knots, each coupled to the knots of its interval); then
+// A^-1 applied to 9 columns (8 border columns and the gradient) as the step does.
+//   Eigen:          Eigen::CholmodSupernodalLLT on a damped copy of EuRoC's H_nn (the step
+//                   before session 13): CHOLMOD's own ordering, its factorize transposing the
+//                   lower triangle twice per call.
 //   SparseCholesky: calibrator/src/solver/sparse_cholesky.h: the permuted pattern built once,
-//                   H_nn + D scattered into it, factored in place (since session 14 by the
-//                   simplicial factorisation CHOLMOD's switch picks for this band).
-// Results: docs/performance.md ("Issue 23, session 13" and "session 14").
+//                   H_nn + D scattered into it, factored in place, by CHOLMOD's simplicial or
+//                   supernodal factorisation (its switch, or forced: where each pays).
+// Results: docs/performance.md ("Issue 23", sessions 13-15).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/CholmodSupport>
@@ -22,9 +21,12 @@ namespace {
 
 using SparseColMajor = ctcal::SparseCholesky::SparseColMajor;
 
-SparseColMajor EurocShapedNormalEquations(int knots) {
-  constexpr int kKnotsPerBias = 143;  // 1 s bias knots over 7 ms trajectory knots
-  const int biases = knots / kKnotsPerBias + 2, n = 6 * (knots + biases);
+// A 6x6-block band of `knots` trajectory knots (order 4: each row couples 4 consecutive knots)
+// and bias knots of `bias_columns` columns every `knots_per_bias` knots, each coupled to the
+// trajectory knots of its interval and to the next bias knot (the bias splines are linear).
+SparseColMajor ShapedNormalEquations(int knots, int knots_per_bias, int bias_columns) {
+  const int biases = knots / knots_per_bias + 2;
+  const int n = 6 * knots + bias_columns * biases;
   std::mt19937 rng(1);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<Eigen::Triplet<double>> triplets;
@@ -32,8 +34,8 @@ SparseColMajor EurocShapedNormalEquations(int knots) {
     std::vector<int> cols;
     for (int c = 6 * k; c < 6 * (k + 4); ++c)
       cols.push_back(c);
-    const int bias = knots + k / kKnotsPerBias;
-    for (int c = 6 * bias; c < 6 * (bias + 2); ++c)
+    const int bias = 6 * knots + bias_columns * (k / knots_per_bias);
+    for (int c = bias; c < bias + 2 * bias_columns; ++c)
       cols.push_back(c);
     Eigen::MatrixXd J(12, static_cast<int>(cols.size()));
     for (int i = 0; i < J.size(); ++i)
@@ -50,6 +52,16 @@ SparseColMajor EurocShapedNormalEquations(int knots) {
   H.setFromTriplets(triplets.begin(), triplets.end());
   H.makeCompressed();
   return H;
+}
+
+// EuRoC's 36 s: 5115 knots at 7 ms, one IMU's gyro and accelerometer bias knot (6 columns) a
+// second. The demo rig: 2062 knots at 29 ms, two IMUs' and a gyroscope's bias knots (15
+// columns) a second.
+SparseColMajor EurocShapedNormalEquations(int knots) {
+  return ShapedNormalEquations(knots, 143, 6);
+}
+SparseColMajor DemoShapedNormalEquations(int knots) {
+  return ShapedNormalEquations(knots, 34, 15);
 }
 
 Eigen::MatrixXd RightHandSides(Eigen::Index n) {
@@ -78,11 +90,18 @@ void BM_Eigen(benchmark::State& state) {
   }
 }
 
+// range(0): knots; range(1): 0 EuRoC-shaped, 1 demo-shaped, 2 and 3 denser bias blocks (80 and
+// 135 flops per entry of L: where the supernodal factorisation starts to pay); range(2):
+// SparseCholesky::Kind (0 auto, 1 simplicial, 2 supernodal).
 void BM_SparseCholesky(benchmark::State& state) {
-  const SparseColMajor H = EurocShapedNormalEquations(static_cast<int>(state.range(0)));
+  const int knots = static_cast<int>(state.range(0));
+  const SparseColMajor H = state.range(1) == 0   ? EurocShapedNormalEquations(knots)
+                           : state.range(1) == 1 ? DemoShapedNormalEquations(knots)
+                           : state.range(1) == 2 ? ShapedNormalEquations(knots, 17, 30)
+                                                 : ShapedNormalEquations(knots, 8, 60);
   const Eigen::MatrixXd B = RightHandSides(H.rows());
   const Eigen::VectorXd d = Eigen::VectorXd::Constant(H.rows(), 1e-8);
-  ctcal::SparseCholesky chol;
+  ctcal::SparseCholesky chol(static_cast<ctcal::SparseCholesky::Kind>(state.range(2)));
   Eigen::MatrixXd X;
   for (auto _ : state) {
     chol.Factorize(H, d);
@@ -90,10 +109,16 @@ void BM_SparseCholesky(benchmark::State& state) {
     chol.ReleaseSolveWorkspace();
     benchmark::DoNotOptimize(X.data());
   }
+  state.counters["supernodal"] = chol.Supernodal() ? 1.0 : 0.0;
+  state.counters["nnz_L"] = chol.FactorNonZeros();
+  state.counters["flops_per_entry"] = chol.FactorFlops() / chol.FactorNonZeros();
 }
 
 BENCHMARK(BM_Eigen)->Arg(5115)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SparseCholesky)->Arg(5115)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SparseCholesky)
+    ->ArgsProduct({{5115}, {0}, {0, 1, 2}})
+    ->ArgsProduct({{2062}, {1, 2, 3}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

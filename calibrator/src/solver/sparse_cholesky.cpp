@@ -63,7 +63,7 @@ void SparseCholesky::Workspace::Release() {
 }
 
 struct SparseCholesky::Impl {
-  Impl() {
+  explicit Impl(Kind kind) : kind_(kind) {
     cholmod_start(&common_);
     common_.print = 0;  // a failure is an invalid step, handled by the caller
   }
@@ -79,6 +79,7 @@ struct SparseCholesky::Impl {
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
 
+  Kind kind_;
   cholmod_common common_;
   cholmod_factor* factor_ = nullptr;
   std::vector<int> perm_;  // new index -> H_nn's index (CHOLMOD's ordering)
@@ -88,7 +89,7 @@ struct SparseCholesky::Impl {
   Workspace solve_;  // of Solve(B, X)
 };
 
-SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::SparseCholesky(Kind kind) : impl_(std::make_unique<Impl>(kind)) {}
 SparseCholesky::~SparseCholesky() = default;
 
 bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
@@ -108,6 +109,10 @@ void SparseCholesky::ReleaseNumeric() {
 
 double SparseCholesky::FactorNonZeros() const {
   return impl_->factor_ == nullptr ? 0.0 : impl_->common_.lnz;
+}
+
+double SparseCholesky::FactorFlops() const {
+  return impl_->factor_ == nullptr ? 0.0 : impl_->common_.fl;
 }
 
 bool SparseCholesky::Supernodal() const {
@@ -202,10 +207,16 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   common_.method[0].ordering = CHOLMOD_NATURAL;
   common_.postorder = 0;
   // Supernodal or simplicial by CHOLMOD's own switch (flops per entry of L): the trajectory's
-  // band fills little, its supernodes are a knot's 6 columns wide, and BLAS calls on blocks that
-  // small cost more than they save (EuRoC's 36 s: the step's linear solver 0.74 -> 0.46 s with
-  // the simplicial factor CHOLMOD picks). A denser H_nn still gets the supernodal one.
-  common_.supernodal = CHOLMOD_AUTO;
+  // band fills little, its supernodes are a few knots' columns wide, and BLAS calls on blocks
+  // that small cost more than they save (EuRoC's 36 s: the step's linear solver 0.74 -> 0.46 s
+  // with the simplicial factor). CHOLMOD's default switch (40) assumes a tuned BLAS; with
+  // Debian's ATLAS, bench_step_factorisation puts the crossing near 80-100 (a factorisation and a
+  // 9-column solve: the demo rig's band at 52 flops per entry 28 ms simplicial against 51 ms
+  // supernodal, a band at 80 even, at 135 the supernodal 1.14x faster; docs/performance.md).
+  common_.supernodal = kind_ == Kind::kSimplicial   ? CHOLMOD_SIMPLICIAL
+                       : kind_ == Kind::kSupernodal ? CHOLMOD_SUPERNODAL
+                                                    : CHOLMOD_AUTO;
+  common_.supernodal_switch = kSupernodalSwitch;
   common_.final_asis = 1;
   // A simplicial factor's columns exactly as long as their counts: they never grow here (no
   // updates), and CHOLMOD's default slack (20 % and 5 entries a column) was memory for nothing.

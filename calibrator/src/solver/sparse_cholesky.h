@@ -22,7 +22,12 @@ class SparseCholesky {
  public:
   using SparseColMajor = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-  SparseCholesky();
+  // kAuto: CHOLMOD's supernodal factorisation where its flops per entry of L reach
+  // kSupernodalSwitch, else the simplicial one; the others force one (benchmarks, tests).
+  enum class Kind { kAuto, kSimplicial, kSupernodal };
+  static constexpr double kSupernodalSwitch = 80.0;  // sparse_cholesky.cpp Analyze: measured
+
+  explicit SparseCholesky(Kind kind = Kind::kAuto);
   ~SparseCholesky();
   SparseCholesky(const SparseCholesky&) = delete;
   SparseCholesky& operator=(const SparseCholesky&) = delete;
@@ -42,6 +47,8 @@ class SparseCholesky {
   // The factor's entries (its analysis'; 0 before the first Factorize): how much it filled, and
   // whether CHOLMOD chose its supernodal factorisation (else the simplicial one).
   double FactorNonZeros() const;
+  // The factorisation's flop count (its analysis'): per entry of L, what kAuto's switch compares.
+  double FactorFlops() const;
   bool Supernodal() const;
 
   // The buffers of one solve at a time (B and X in the factor's order, CHOLMOD's workspace and

@@ -210,6 +210,33 @@ TEST_P(SparseCholeskyOf, KindSolvesAndRefusesAMatrixThatIsNotPositiveDefinite) {
   EXPECT_TRUE(chol.Factorize(A, small));
 }
 
+// Both factorisations forced on one band give the same solution; kAuto takes the supernodal one
+// exactly where the analysis' flops per entry of L reach the switch.
+TEST(SparseCholesky, ForcedKindsAgreeAndTheSwitchFollowsTheFlopsPerEntry) {
+  std::mt19937 rng(11);
+  const SparseColMajor A = BandWithBiases(120, &rng, 1.0);
+  const Eigen::VectorXd d = Eigen::VectorXd::Constant(A.rows(), 1e-4);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Ones(A.rows(), 3);
+  Eigen::MatrixXd X_simplicial, X_supernodal;
+  SparseCholesky simplicial(SparseCholesky::Kind::kSimplicial);
+  SparseCholesky supernodal(SparseCholesky::Kind::kSupernodal);
+  ASSERT_TRUE(simplicial.Factorize(A, d));
+  ASSERT_TRUE(supernodal.Factorize(A, d));
+  EXPECT_FALSE(simplicial.Supernodal());
+  EXPECT_TRUE(supernodal.Supernodal());
+  ASSERT_TRUE(simplicial.Solve(B, &X_simplicial));
+  ASSERT_TRUE(supernodal.Solve(B, &X_supernodal));
+  EXPECT_LE((X_simplicial - X_supernodal).norm(), 1e-10 * X_supernodal.norm());
+  for (const SparseColMajor& M : {A, DenseLower(90, &rng), DenseLower(200, &rng)}) {
+    SparseCholesky chol;
+    ASSERT_TRUE(chol.Factorize(M, Eigen::VectorXd::Constant(M.rows(), 1e-3)));
+    EXPECT_EQ(chol.Supernodal(),
+              chol.FactorFlops() / chol.FactorNonZeros() >= SparseCholesky::kSupernodalSwitch)
+        << M.rows() << " columns, " << chol.FactorFlops() / chol.FactorNonZeros()
+        << " flops per entry";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(, SparseCholeskyOf, ::testing::Values(false, true),
                          [](const ::testing::TestParamInfo<bool>& p) {
                            return p.param ? "Supernodal" : "Simplicial";
