@@ -8,6 +8,7 @@
 #include <memory>
 #include <opencv2/calib3d.hpp>
 
+#include "corner_reprojection.h"
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/spline/so3.h"
 
@@ -79,29 +80,6 @@ double ClosedFormFocalScale(const CameraModel& guess, const Board& board,
   const double k = 1.0 / std::sqrt(x);
   return (k > 0.5 && k < 2.0) ? k : 1.0;
 }
-
-// A corner's reprojection error r = pi(params, R_C_W p_W + t_C_W) - uv, with the camera model's
-// own templated projection (the pose is the board's in the camera, stored as a quaternion
-// x, y, z, w and a translation).
-template <class Model>
-struct CornerReprojection {
-  CornerReprojection(const Eigen::Vector3d& p_W_in, const Eigen::Vector2d& uv_in)
-      : p_W(p_W_in), uv(uv_in) {}
-  template <typename T>
-  bool operator()(const T* params, const T* q, const T* t, T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q_C_W(q);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_C_W(t);
-    const Eigen::Matrix<T, 3, 1> p_C = q_C_W * p_W.cast<T>() + t_C_W;
-    Eigen::Matrix<T, 2, 1> uv_hat;
-    if (!Model::template Project<T>(params, p_C, &uv_hat))
-      return false;
-    residual[0] = uv_hat[0] - T(uv[0]);
-    residual[1] = uv_hat[1] - T(uv[1]);
-    return true;
-  }
-  Eigen::Vector3d p_W;
-  Eigen::Vector2d uv;
-};
 
 struct ViewState {
   Eigen::Quaterniond q_C_W;
@@ -194,8 +172,7 @@ bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vecto
     ceres::CostFunction* cost = VisitCameraModel(camera->type(), [&](auto model) {
       using Model = decltype(model);
       return static_cast<ceres::CostFunction*>(
-          new ceres::AutoDiffCostFunction<CornerReprojection<Model>, 2, Model::kNumParams, 4, 3>(
-              new CornerReprojection<Model>(refs[k].p_W, refs[k].uv)));
+          new CornerReprojection<Model>(refs[k].p_W, refs[k].uv));
     });
     problem.AddResidualBlock(cost, &loss, params.data(), v.q_C_W.coeffs().data(), v.t_C_W.data());
   }

@@ -51,10 +51,10 @@ struct IntrinsicsInitResult {
 //     about the principal point; Zhang's two constraints per view (r1 . r2 = 0, |r1| = |r2|) with
 //     K = diag(k, k, 1) are linear in 1/k^2 and solved over all views;
 //  b. board poses by robust PnP with the rescaled model (stage 2);
-//  c. Ceres refinement of all intrinsics and the board poses with the model's templated projection
-//     and a Cauchy loss: projection parameters first (distortion held), then everything, then
-//     once more without the outlier corners. Each refinement leaves out the corners that the
-//     model cannot project at its start values (counted in `unprojectable`).
+//  c. Ceres refinement of all intrinsics and the board poses with the model's projection and its
+//     analytic Jacobians and a Cauchy loss: projection parameters first (distortion held), then
+//     everything, then once more without the outlier corners. Each refinement leaves out the
+//     corners that the model cannot project at its start values (counted in `unprojectable`).
 // Throws InitError (stage "camera intrinsics") with fewer than min_views usable frames, when
 // the refinement does not converge to a valid model, or when it moves a focal length beyond
 // max_focal_ratio of the guess (views that do not determine it, e.g. all fronto-parallel).
