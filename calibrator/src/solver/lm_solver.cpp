@@ -584,8 +584,12 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     final_point_ = type != ceres::FAILURE && jacobian_at_x;
     partial_cc_.clear();
     scratch_.clear();
+    // A caller's factorisation keeps its numeric factor for the next solve or the covariance of
+    // the same pattern (the final solve, MarginalizeNuisance, which frees it): factoring into a
+    // released one allocates and fills L's columns anew (EuRoC's 36 s: 112 instead of 27 ms, each
+    // time). The peak, in a Jacobian pass beside H and the factor, stays (measured).
     if (llt_ != nullptr)
-      llt_->ReleaseNumeric();  // a caller's keeps its analysis
+      llt_->ReleaseSolveWorkspace();
     llt_.reset();
     S.termination_type = type;
     S.message = message;

@@ -39,9 +39,9 @@ class SparseCholesky {
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
 
   // Frees the factor's values (and Solve(B, X)'s workspace, as ReleaseSolveWorkspace) and keeps
-  // its analysis for the next Factorize of the same pattern:
-  // the spline calibration's robust and final solves and their covariance share one (the
-  // analysis was a third of each solve's first step on the demo rig).
+  // its analysis for the next Factorize of the same pattern: the spline calibration's robust and
+  // final solves and their covariance share one (the analysis was a third of each solve's first
+  // step on the demo rig), whose factor is freed once the covariance is done with it.
   void ReleaseNumeric();
 
   // The factor's entries (its analysis'; 0 before the first Factorize): how much it filled, and

@@ -36,8 +36,8 @@ namespace ctcal {
 
 // What the solves of one problem's shape share (the robust and final solve of a spline
 // calibration, and its covariance): the nuisance columns' order, and the factorisation's
-// ordering and symbolic analysis of that pattern, computed once; the factor's values are freed
-// at the end of each solve. Opaque (lm_solver.cpp).
+// ordering and symbolic analysis of that pattern, computed once; the factor itself stays
+// allocated from solve to solve (the covariance frees it). Opaque (lm_solver.cpp).
 class NuisanceFactorisation;
 std::shared_ptr<NuisanceFactorisation> MakeNuisanceFactorisation();
 
