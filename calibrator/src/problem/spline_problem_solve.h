@@ -51,6 +51,12 @@ ceres::Solver::Summary SplineProblem<N, Rep>::Solve() {
     solver_ = std::make_unique<LevenbergMarquardt>(
         so, border, problem_.get(), point_in_memory_used_ ? &point_in_memory_ : nullptr,
         factorisation_);
+    // The plain solves' stopping rule is about the calibration (the border), whose scalars the
+    // result reports: stop once the step would move it by < stop_cost_change in its marginal
+    // metric, however the trajectory still moves (EuRoC's knots crawl along directions its
+    // calibration barely sees; docs/performance.md, issue 23 session 15).
+    if (!robust_ && options_.stop_cost_change > 0.0)
+      solver_->StopOnBorderDecrease(options_.stop_cost_change);
     // The solver that holds less: long recordings' compressed inertial blocks span many knots,
     // and their band can exceed Ceres' Jacobian and J^T J together (10 min at 1 kHz). Since the
     // threads share one H (lm_solver.cpp PartitionBlocks), EuRoC's 36 s (34 MB against 49 MB)

@@ -34,6 +34,11 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
+// StopOnBorderDecrease judges only steps whose damping D = diag(H) / radius is negligible: a
+// damped step understates the distance to the optimum (the step starts at radius 1e8 and grows
+// on success; a rejected step halves it and more).
+constexpr double kBorderStopRadius = 1e6;
+
 // A free parameter block: one column block of the normal equations.
 struct Column {
   double* values = nullptr;
@@ -128,6 +133,7 @@ class LevenbergMarquardt::Impl {
 
   void Solve(ceres::Solver::Summary* summary);
   const std::vector<double*>& Border() const { return border_; }
+  void StopOnBorderDecrease(double cost_change) { border_stop_ = std::max(0.0, cost_change); }
   MarginalInformation MarginalizeToBorder();
   std::size_t NormalEquationsBytes() const {
     const std::size_t n = static_cast<std::size_t>(H_->n()), c = static_cast<std::size_t>(H_->c());
@@ -187,6 +193,8 @@ class LevenbergMarquardt::Impl {
   const std::shared_ptr<NuisanceFactorisation> shared_;  // the caller's, or null
   std::vector<double*> border_;
   bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
+  double border_stop_ = 0.0;  // StopOnBorderDecrease's cost change (0: off)
+  double border_decrease_ = std::numeric_limits<double>::infinity();  // of the last step
 };
 
 void LevenbergMarquardt::Impl::Setup(const std::vector<double*>& border) {
@@ -532,6 +540,11 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     if (llt.info() != Eigen::Success)
       return false;
     step->tail(c) = llt.solve(rhs);
+    // The border's share of the model decrease, 1/2 d_c^T S d_c, with S undamped.
+    const Eigen::VectorXd d_c = step->tail(c);
+    border_decrease_ = 0.5 * (d_c.dot(S * d_c) - d_c.dot(D.tail(c).cwiseProduct(d_c)));
+  } else {
+    border_decrease_ = 0.0;
   }
   if (n > 0) {
     // d_n = -A_nn^-1 (g_n + H_nc d_c).
@@ -712,6 +725,11 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     }
     invalid_steps = 0;
     it.step_is_valid = true;
+    // The border converged (StopOnBorderDecrease): the point stays, with its normal equations.
+    if (border_stop_ > 0.0 && radius >= kBorderStopRadius && border_decrease_ < border_stop_) {
+      finish(ceres::CONVERGENCE, "Border's predicted decrease below its tolerance.", x_cost);
+      return;
+    }
 
     // The candidate, evaluated in the parameter blocks' memory.
     double candidate_cost = std::numeric_limits<double>::max();
@@ -778,6 +796,9 @@ LevenbergMarquardt::LevenbergMarquardt(const ceres::Solver::Options& options,
 LevenbergMarquardt::~LevenbergMarquardt() = default;
 void LevenbergMarquardt::Solve(ceres::Solver::Summary* summary) {
   impl_->Solve(summary);
+}
+void LevenbergMarquardt::StopOnBorderDecrease(double cost_change) {
+  impl_->StopOnBorderDecrease(cost_change);
 }
 const std::vector<double*>& LevenbergMarquardt::Border() const {
   return impl_->Border();

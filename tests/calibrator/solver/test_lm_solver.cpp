@@ -10,8 +10,10 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "ctcal/calibrator/lm_solver.h"
@@ -320,6 +322,60 @@ TEST(LmSolver, BorderInformationIsTheMarginalInformationAtTheSolution) {
       << solved.information << "\n\n"
       << fresh.information;
   EXPECT_THROW(lm.MarginalizeToBorder(), std::logic_error);  // taken over once
+}
+
+// The border's stop (StopOnBorderDecrease): the solve ends once the step's predicted decrease of
+// the calibration alone is below the tolerance, at a border within sqrt(2 tolerance) of the fully
+// converged one in the marginal metric there; a tolerance above the first step's share ends it
+// before any step. (The scale's bound is lifted: a border held on a bound has a step share the
+// bound does not let it take, and the rule never fires.)
+TEST(LmSolver, BorderStopEndsWithinItsToleranceOfTheConvergedBorder) {
+  const auto unbounded = [](TestProblem* t) {
+    MakeProblem(t, false);
+    t->problem->SetParameterUpperBound(&t->s, 0, std::numeric_limits<double>::max());
+  };
+  TestProblem full;
+  unbounded(&full);
+  LevenbergMarquardt reference(Options(2), full.Border(), full.problem.get());
+  ceres::Solver::Summary converged;
+  reference.Solve(&converged);
+  ASSERT_EQ(converged.termination_type, ceres::CONVERGENCE);
+  const Eigen::MatrixXd S = reference.MarginalizeToBorder().information;
+  ASSERT_EQ(S.rows(), 7);
+  // The border's tangent offset from the converged one (the quaternion manifold's left
+  // perturbation: q = Exp(d) q_ref, d half the rotation vector).
+  const auto offset = [&](const TestProblem& t) {
+    Eigen::VectorXd d(7);
+    const Eigen::Quaterniond e = t.q_c * full.q_c.conjugate();
+    d.head<3>() = (e.w() < 0.0 ? -1.0 : 1.0) * e.vec();
+    d.segment<3>(3) = t.t_c - full.t_c;
+    d(6) = t.s - full.s;
+    return d;
+  };
+  for (const double tolerance : {1e-2, 1.0}) {
+    TestProblem t;
+    unbounded(&t);
+    LevenbergMarquardt lm(Options(2), t.Border(), t.problem.get());
+    lm.StopOnBorderDecrease(tolerance);
+    ceres::Solver::Summary summary;
+    lm.Solve(&summary);
+    SCOPED_TRACE("tolerance " + std::to_string(tolerance));
+    EXPECT_EQ(summary.termination_type, ceres::CONVERGENCE);
+    EXPECT_NE(summary.message.find("Border"), std::string::npos) << summary.message;
+    EXPECT_LT(summary.iterations.size(), converged.iterations.size());
+    const Eigen::VectorXd d = offset(t);
+    // The quadratic model's bound, with room for the model's error a step away.
+    EXPECT_LT(d.dot(S * d), 2.0 * (2.0 * tolerance)) << d.transpose();
+  }
+  TestProblem first;
+  unbounded(&first);
+  const std::vector<double> start = first.Values();
+  LevenbergMarquardt lm(Options(2), first.Border(), first.problem.get());
+  lm.StopOnBorderDecrease(1e12);
+  ceres::Solver::Summary summary;
+  lm.Solve(&summary);
+  EXPECT_EQ(summary.num_successful_steps, 1);  // iteration 0 only
+  EXPECT_EQ(first.Values(), start);
 }
 
 }  // namespace

@@ -64,6 +64,14 @@ class LevenbergMarquardt {
   // As SolveLevenbergMarquardt. Afterwards only the normal equations at the final point are kept.
   void Solve(ceres::Solver::Summary* summary);
 
+  // Solve() also stops, at the point it is at, once the Gauss-Newton step's predicted decrease
+  // of the border alone, 1/2 d_c^T S d_c with S = H_cc - H_cn H_nn^-1 H_nc (the nuisance
+  // re-optimised along the step), is below `cost_change` (> 0; 0, the default: off): the border
+  // is then within sqrt(2 cost_change) of its converged value in its marginal metric, each of
+  // its scalars within that many of its marginal sigmas, whatever the nuisance still crawls.
+  // Judged only on a step whose damping is negligible (trust region radius >= 1e6).
+  void StopOnBorderDecrease(double cost_change);
+
   // The border blocks the normal equations hold: those of `border` that are free and read by a
   // residual block, in its order.
   const std::vector<double*>& Border() const;

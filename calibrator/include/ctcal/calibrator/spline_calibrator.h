@@ -91,8 +91,11 @@ struct SplineCalibratorOptions {
   // The plain solves stop once a step would lower the cost F (1/2 sum of squared whitened
   // residuals) by less than this. Near the optimum a Gauss-Newton step lands on it and lowers F by
   // 1/2 |x - x*|^2 in the information metric, which bounds every scalar's distance to the
-  // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. 0: Ceres'
-  // relative tolerances of 1e-10 alone (the fully converged reference).
+  // converged estimate by sqrt(2 stop_cost_change) of its sigma: 0.005 -> 0.1 sigma. The own
+  // solver also stops once the step's share of the calibration alone (the trajectory and biases
+  // marginalised) is predicted below it, which bounds the calibration's scalars the same way
+  // (lm_solver.h StopOnBorderDecrease). 0: Ceres' relative tolerances of 1e-10 alone (the fully
+  // converged reference).
   double stop_cost_change = 0.005;
   // The robust solve stops once the next step is predicted to lower the cost by < 1e-4 of it
   // (spline_problem.h RobustStageStop) instead of computing that step; false: Ceres'
