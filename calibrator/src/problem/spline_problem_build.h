@@ -23,8 +23,9 @@ void SplineProblem<N, Rep>::InitializeTrajectory() {
     imu.push_back(z);
   }
   Eigen::Vector3d g_W = state_.gravity();
-  const TrajectoryFitReport r =
-      TrajectoryFit<N, Rep>(poses, imu, TrajectoryFitOptions{}).Run(&spline_, &g_W);
+  TrajectoryFitOptions fit;
+  fit.threads = options_.threads;
+  const TrajectoryFitReport r = TrajectoryFit<N, Rep>(poses, imu, fit).Run(&spline_, &g_W);
   state_.SetGravity(g_W);
   char line[200];
   std::snprintf(line, sizeof line,

@@ -203,6 +203,41 @@ TEST(SplineInit, BoardPoseRefinementReachesOpenCvsOptimum) {
               worst_deg, worst_m);
 }
 
+// The trajectory fit's data on the true calibration: both cameras' base poses (sorted by time)
+// and the base IMU's samples with the truth's intrinsics and the simulator's biases (the ground
+// truth is stamped at the base IMU's samples).
+struct FitData {
+  std::vector<TimedPose> poses;
+  std::vector<spline_internal::BaseRateSample> imu;
+};
+
+FitData TrueFitData(const Simulated& sim) {
+  FitData d;
+  for (const char* name : {"cam0", "cam1"}) {
+    const std::vector<TimedPose> p = TrueBasePoses(sim, name);
+    d.poses.insert(d.poses.end(), p.begin(), p.end());
+  }
+  std::sort(d.poses.begin(), d.poses.end(),
+            [](const TimedPose& a, const TimedPose& b) { return a.t_ns < b.t_ns; });
+  CalibrationState state(sim.truth);
+  const SensorState& base = *state.Find(sim.truth.base_imu);
+  std::map<std::int64_t, const GroundTruthState*> truth_at;
+  for (const GroundTruthState& g : sim.gt)
+    truth_at[g.t_ns] = &g;
+  for (const ImuSample& s : sim.data.at(sim.truth.base_imu).imu) {
+    const auto it = truth_at.find(s.t_ns);
+    if (it == truth_at.end()) {
+      ADD_FAILURE() << "no ground truth at the base IMU's sample " << s.t_ns;
+      continue;
+    }
+    spline_internal::BaseRateSample z;
+    z.t_ns = s.t_ns;
+    base.imu->TrueFromRaw(s.w_m, s.a_m, it->second->b_g, it->second->b_a, &z.w_I, &z.a_I);
+    d.imu.push_back(z);
+  }
+  return d;
+}
+
 // The initial trajectory fit (spline_trajectory_fit.h) on the true calibration: from knots at the
 // nearest board-view pose (errors of degrees and centimetres between views), Gauss-Newton on the
 // poses and the base IMU (corrected by its true intrinsics and biases) must recover the simulated
@@ -211,31 +246,10 @@ TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
   const Simulated& sim = Simulation();
   const RigConfig& truth = sim.truth;
   const std::vector<GroundTruthState>& gt = sim.gt;
-  std::vector<TimedPose> poses;
-  for (const char* name : {"cam0", "cam1"}) {
-    const std::vector<TimedPose> p = TrueBasePoses(sim, name);
-    poses.insert(poses.end(), p.begin(), p.end());
-  }
-  std::sort(poses.begin(), poses.end(),
-            [](const TimedPose& a, const TimedPose& b) { return a.t_ns < b.t_ns; });
+  const FitData data = TrueFitData(sim);
+  const std::vector<TimedPose>& poses = data.poses;
+  const std::vector<spline_internal::BaseRateSample>& imu = data.imu;
   ASSERT_GT(poses.size(), 80u);
-
-  // The base IMU's samples with the truth's intrinsics and the simulator's biases (the ground
-  // truth is stamped at the base IMU's samples).
-  CalibrationState state(truth);
-  const SensorState& base = *state.Find(truth.base_imu);
-  std::map<std::int64_t, const GroundTruthState*> truth_at;
-  for (const GroundTruthState& g : gt)
-    truth_at[g.t_ns] = &g;
-  std::vector<spline_internal::BaseRateSample> imu;
-  for (const ImuSample& s : sim.data.at(truth.base_imu).imu) {
-    const auto it = truth_at.find(s.t_ns);
-    ASSERT_NE(it, truth_at.end()) << s.t_ns;
-    spline_internal::BaseRateSample z;
-    z.t_ns = s.t_ns;
-    base.imu->TrueFromRaw(s.w_m, s.a_m, it->second->b_g, it->second->b_a, &z.w_I, &z.a_I);
-    imu.push_back(z);
-  }
 
   using Fit = spline_internal::TrajectoryFit<4, Se3Representation::kSplit>;
   const std::int64_t t0 = poses.front().t_ns, t1 = poses.back().t_ns;
@@ -271,6 +285,61 @@ TEST(SplineInit, TrajectoryFitRecoversTheMotionAndGravity) {
       "trajectory fit: max rotation error %.3f deg, position %.2f mm, gravity %.3f deg, "
       "%d iterations\n",
       max_deg, 1e3 * max_m, g_deg, report.iterations);
+}
+
+// The fit's normal equations assembled on several threads (chunks of consecutive segments whose
+// boundary rows and gravity block are summed in chunk order): 2, 3 and 64 threads (64: chunks
+// narrower than a segment's N knots, some empty) must agree with 1 to rounding, and two runs on 2
+// threads bit for bit. A chunk's samples dropped or counted twice, or its boundary rows lost,
+// move the cost and the knots by far more.
+TEST(SplineInit, TrajectoryFitOnThreadsAgreesWithOneThreadAndRepeatsItsBits) {
+  const FitData data = TrueFitData(Simulation());
+  ASSERT_GT(data.poses.size(), 80u);
+  using Fit = spline_internal::TrajectoryFit<4, Se3Representation::kSplit>;
+  struct Result {
+    std::vector<double> knots;
+    Eigen::Vector3d g_W;
+    spline_internal::TrajectoryFitReport report;
+  };
+  const auto fit = [&](int threads) {
+    const std::int64_t t0 = data.poses.front().t_ns, t1 = data.poses.back().t_ns;
+    const std::int64_t dt = 30000000;
+    Se3Spline<4> spline(KnotTiming{t0, dt}, static_cast<int>((t1 - t0) / dt) + 4);
+    Fit::SeedKnots(data.poses, &spline);
+    Result r;
+    r.g_W = Eigen::Vector3d(0.0, 0.0, -9.81);
+    spline_internal::TrajectoryFitOptions options;
+    options.threads = threads;
+    r.report = Fit(data.poses, data.imu, options).Run(&spline, &r.g_W);
+    r.knots.assign(spline.KnotData(0), spline.KnotData(0) + 7 * spline.NumKnots());
+    return r;
+  };
+  const Result one = fit(1);
+  EXPECT_GT(one.report.iterations, 0);
+  for (const int threads : {2, 3, 64}) {
+    const Result r = fit(threads);
+    EXPECT_EQ(r.report.iterations, one.report.iterations) << threads << " threads";
+    EXPECT_NEAR(r.report.initial_cost, one.report.initial_cost, 1e-9 * one.report.initial_cost)
+        << threads << " threads";
+    EXPECT_NEAR(r.report.final_cost, one.report.final_cost, 1e-9 * one.report.final_cost)
+        << threads << " threads";
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(r.g_W[i], one.g_W[i], 1e-9 * one.g_W.norm()) << threads << " threads";
+    ASSERT_EQ(r.knots.size(), one.knots.size());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < r.knots.size(); ++i)
+      worst = std::max(worst,
+                       std::abs(r.knots[i] - one.knots[i]) / std::max(1.0, std::abs(one.knots[i])));
+    EXPECT_LT(worst, 1e-9) << threads << " threads";
+    std::printf("trajectory fit on %d threads vs 1: knots %.1e, cost %.1e relative\n", threads,
+                worst, std::abs(r.report.final_cost / one.report.final_cost - 1.0));
+  }
+  const Result a = fit(2), b = fit(2);
+  EXPECT_EQ(a.knots, b.knots);  // exact: the same partition sums in the same order
+  EXPECT_EQ(a.g_W, b.g_W);
+  EXPECT_EQ(a.report.initial_cost, b.report.initial_cost);
+  EXPECT_EQ(a.report.final_cost, b.report.final_cost);
+  EXPECT_EQ(a.report.iterations, b.report.iterations);
 }
 
 }  // namespace
