@@ -544,7 +544,9 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     const Eigen::VectorXd d_c = step->tail(c);
     border_decrease_ = 0.5 * (d_c.dot(S * d_c) - d_c.dot(D.tail(c).cwiseProduct(d_c)));
   } else {
-    border_decrease_ = 0.0;
+    // No border, no calibration to have converged: the rule does not apply (a zero would end
+    // the solve before its first step).
+    border_decrease_ = std::numeric_limits<double>::infinity();
   }
   if (n > 0) {
     // d_n = -A_nn^-1 (g_n + H_nc d_c).

@@ -376,6 +376,15 @@ TEST(LmSolver, BorderStopEndsWithinItsToleranceOfTheConvergedBorder) {
   lm.Solve(&summary);
   EXPECT_EQ(summary.num_successful_steps, 1);  // iteration 0 only
   EXPECT_EQ(first.Values(), start);
+  // Without a border there is no calibration to have converged: the solve runs to its optimum.
+  TestProblem none;
+  unbounded(&none);
+  LevenbergMarquardt plain(Options(2), {}, none.problem.get());
+  plain.StopOnBorderDecrease(1e12);
+  plain.Solve(&summary);
+  EXPECT_EQ(summary.termination_type, ceres::CONVERGENCE);
+  EXPECT_EQ(summary.message.find("Border"), std::string::npos) << summary.message;
+  EXPECT_NEAR(summary.final_cost, converged.final_cost, 1e-10 * converged.final_cost);
 }
 
 }  // namespace

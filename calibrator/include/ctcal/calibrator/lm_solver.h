@@ -69,7 +69,8 @@ class LevenbergMarquardt {
   // re-optimised along the step), is below `cost_change` (> 0; 0, the default: off): the border
   // is then within sqrt(2 cost_change) of its converged value in its marginal metric, each of
   // its scalars within that many of its marginal sigmas, whatever the nuisance still crawls.
-  // Judged only on a step whose damping is negligible (trust region radius >= 1e6).
+  // Judged only on a step whose damping is negligible (trust region radius >= 1e6); never
+  // without a border.
   void StopOnBorderDecrease(double cost_change);
 
   // The border blocks the normal equations hold: those of `border` that are free and read by a
