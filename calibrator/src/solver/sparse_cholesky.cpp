@@ -142,9 +142,10 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
 
   // The fill-reducing order: CHOLMOD's AMD on H_nn's pattern as given, which postorders its
   // assembly tree itself. Only the permutation is wanted here: cholmod_analyze would also run a
-  // symbolic factorisation of the unpermuted pattern (EuRoC's 36 s: 70 of the analysis' 160 ms
-  // in bench_step_factorisation, the same L). Default settings first: the analysis below leaves
-  // the natural order set, and a pattern analysed anew in natural order filled ~15x slower.
+  // symbolic factorisation of the unpermuted pattern (the same L; bench_step_factorisation's
+  // EuRoC-shaped BM_AnalyseAndFactorize 75-81 -> 61-64 ms without it). Default settings first:
+  // the analysis below leaves the natural order set, and a pattern analysed anew in natural order
+  // filled ~15x slower.
   cholmod_defaults(&common_);
   common_.print = 0;
   {
@@ -160,8 +161,9 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   // Entry k of H_nn, (i, j) with i >= j, goes to (max, min) of (position[i], position[j]): counted
   // per new column, scattered into its column in one pass, then each column's few rows sorted
   // ascending (as CHOLMOD wants them) by insertion, target_ following its entries. One scatter
-  // and no arrays beyond the ones kept: the two counting sorts before (with four scratch arrays
-  // of nnz) were 66 ms of EuRoC's analysis, bound by their cache misses and page faults.
+  // and one scratch array of nnz (each slot's entry): the two counting sorts before, with four,
+  // were 83 ms of EuRoC's first factorisation in the calibration, bound by their cache misses and
+  // page faults.
   col_start_.assign(static_cast<std::size_t>(n) + 1, 0);
   for (int j = 0; j < n; ++j) {
     const int b = position[static_cast<std::size_t>(j)];
