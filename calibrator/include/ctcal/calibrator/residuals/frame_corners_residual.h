@@ -11,9 +11,11 @@
 // p_C -> Exp(dtheta) p_C + dt, and the intrinsics, so that (P_i = d uv / d p_C at corner i)
 //   J_i = d e_i / d x = -1/sigma_i [P_i [-[p_C,i]x, I],  d uv_i / d params]        (2 x n_x).
 //
-// Compression. Stack e (2M) and J (2M x n_x) over the M corners and Householder-factor the
-// augmented matrix [J | e] = Q [R  z; 0  rho; 0  0]. Then z = Q1^T e, |rho| = ||Q2^T e|| and the
-// block returns r = [z; |rho|] (n_x + 1 rows) with the Jacobian [R; 0] with respect to x:
+// Compression. Stack e (2M) and J (2M x n_x) over the M corners and factor the augmented
+// matrix [J | e] = Q [R  z; 0  rho; 0  0] (Householder's QR, or the same R, z, |rho| from the
+// Cholesky factor of [J | e]^T [J | e]: frame_corners_compression.h). Then z = Q1^T e, |rho| =
+// ||Q2^T e|| and the block returns r = [z; |rho|] (n_x + 1 rows) with the Jacobian [R; 0] with
+// respect to x:
 //   ||r||^2 = ||e||^2                  (Q is orthogonal: the cost is exact),
 //   [R; 0]^T r = R^T z = J^T e         (the gradient is exact),
 //   R^T R = J^T J                      (the Gauss-Newton Hessian is exact).
@@ -59,7 +61,8 @@
 // Each of the two blocks factors the frame on its own (no state is shared between blocks, which
 // Ceres evaluates on several threads in any order); a residual-only evaluation (Ceres' candidate
 // steps) returns the whole cost from the pose rows, r = [sqrt(sum rho); 0], and zeros from the
-// intrinsic rows, without a second factorisation.
+// intrinsic rows, without a second factorisation. So does the unsplit block: a candidate's cost
+// is all that evaluation is for, and sum rho(s_i) needs neither the Jacobians nor the factor.
 //
 // A corner that does not project validly makes Evaluate return false (see corner_residual.h).
 // The autodiff path (--autodiff) keeps one Jet block per corner (CornerResidual's functor): the
@@ -215,7 +218,21 @@ class FrameCornersResidual {
       const Eigen::Matrix3d R_C_W = R_C_B * kin.R_W_B.transpose();
       const Eigen::Vector3d t_C_W = -R_C_W * kin.p_W_B - R_C_B * t_B_C;
 
-      // [J | e] of every corner, weighted for the robust stage, QR-compressed to [R | z] and the
+      if (jacobians == nullptr) {
+        // Residual only (a candidate step's cost): the whole cost in the first row, summed over
+        // the corners without the factorisation (file comment).
+        double cost = 0.0;
+        const bool projected =
+            held_ != nullptr
+                ? FrameCornersCostOf<Model>(num_corners_, HeldCornerAt{held_, board_W_}, p[kParams],
+                                            R_C_W, t_C_W, huber_, &cost)
+                : FrameCornersCostOf<Model>(num_corners_, OwnedCornerAt{owned_.data()}, p[kParams],
+                                            R_C_W, t_C_W, huber_, &cost);
+        std::fill_n(residuals, Rows, 0.0);
+        residuals[0] = std::sqrt(cost);
+        return projected;
+      }
+      // [J | e] of every corner, weighted for the robust stage, compressed to [R | z] and the
       // remainder row (frame_corners_compression.h; this file's comment derives it).
       MatX R;
       double r[kNx + 1];
@@ -226,15 +243,7 @@ class FrameCornersResidual {
               : CompressFrameCorners<Model>(owned_, p[kParams], R_C_W, t_C_W, huber_, r, &R);
       if (!projected)
         return false;
-      if (Rows != kNx + 1 && jacobians == nullptr) {
-        // A half of the split, residual only: the whole cost in its first row (file comment).
-        std::fill_n(residuals, Rows, 0.0);
-        residuals[0] = Eigen::Map<const Eigen::Matrix<double, kNx + 1, 1>>(r).norm();
-        return true;
-      }
       std::copy(r + R0, r + R0 + Rows, residuals);
-      if (jacobians == nullptr)
-        return true;
 
       // d x / d block (6 x tangent) for the pose part; then R * that, lifted.
       const Eigen::Matrix<double, kNx, 6> R_pose = R.template leftCols<6>();
