@@ -2,8 +2,9 @@
 // for the AprilGrid detector at 752x480 and 1280x800 (rendered views of the 6x6 grid filling ~half
 // the image, and EuRoC's real image), the checkerboard detector (opencv-doc's left01.jpg), and the
 // renderer's frames per second; and a rendered 752x480 video tracked (BoardTracker) against the
-// same frames detected one by one. Numbers go to docs/performance.md, sections "Detection" and
-// "Detection tracking".
+// same frames detected one by one; and reading EuRoC's real 752x480 PNG (ReadImageFile against
+// cv::imread). Numbers go to docs/performance.md, sections "Detection" and "Detection tracking",
+// and issue 23's "process start".
 #include <benchmark/benchmark.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -14,6 +15,7 @@
 
 #include "ctcal/targets/board_tracking.h"
 #include "ctcal/targets/detector.h"
+#include "ctcal/targets/image_file.h"
 #include "ctcal/targets/renderer.h"
 
 namespace ctcal {
@@ -125,7 +127,7 @@ void DetectFile(benchmark::State& state, const std::string& path, const TargetCo
     state.SkipWithError((path + " is absent").c_str());
     return;
   }
-  const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const cv::Mat image = ReadImageFile(path);
   const Detector detector{Board(config)};
   size_t corners = 0;
   for (auto _ : state) {
@@ -136,18 +138,42 @@ void DetectFile(benchmark::State& state, const std::string& path, const TargetCo
   state.SetItemsProcessed(state.iterations());
 }
 
-void DetectEurocReal(benchmark::State& state) {
-  // bench/ has no CTCAL_SHARED_DATA_DIR: the shared data sit beside the worktree, which holds
-  // build/bench/bench_detect.
+// EuRoC's real image. bench/ has no CTCAL_SHARED_DATA_DIR: the shared data sit beside the
+// worktree, which holds build/bench/bench_detect.
+std::string EurocPng() {
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe");
-  DetectFile(
-      state,
-      (exe.parent_path() / ".." / ".." / ".." / "shared" / "data" / "aprilgrid" / "EuRoC.png")
-          .lexically_normal()
-          .string(),
-      TargetConfig{});
+  return (exe.parent_path() / ".." / ".." / ".." / "shared" / "data" / "aprilgrid" / "EuRoC.png")
+      .lexically_normal()
+      .string();
+}
+
+void DetectEurocReal(benchmark::State& state) {
+  DetectFile(state, EurocPng(), TargetConfig{});
 }
 BENCHMARK(DetectEurocReal)->Unit(benchmark::kMillisecond);
+
+// Reading the 752x480 8-bit PNG: ctcal's reader (libpng) against cv::imread (the same libpng
+// underneath, so the same time is expected: the row filters' unfiltering dominates, not zlib).
+template <cv::Mat (*Read)(const std::string&)>
+void ReadEuroc(benchmark::State& state) {
+  const std::string path = EurocPng();
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError((path + " is absent").c_str());
+    return;
+  }
+  for (auto _ : state) {
+    const cv::Mat image = Read(path);
+    benchmark::DoNotOptimize(image.data);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+cv::Mat CvImread(const std::string& path) {
+  return cv::imread(path, cv::IMREAD_UNCHANGED);
+}
+BENCHMARK(ReadEuroc<ReadImageFile>)
+    ->Name("ReadEurocPng/ReadImageFile")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(ReadEuroc<CvImread>)->Name("ReadEurocPng/cv::imread")->Unit(benchmark::kMillisecond);
 
 void DetectCheckerboardReal(benchmark::State& state) {
   TargetConfig config;

@@ -9,7 +9,15 @@ if(_ceres_has_suitesparse EQUAL -1)
     "ctcal needs Ceres built with SuiteSparse (CHOLMOD); the Ceres found at ${Ceres_DIR} has no "
     "SuiteSparse support. Install Debian's libceres-dev and libsuitesparse-dev (make deps).")
 endif()
-find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d aruco)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc calib3d aruco imgcodecs)
+# What ctcal's libraries, and so the ctcal program, link: not imgcodecs, which pulls GDAL, gdcm,
+# poppler, hdf5 and ~90 more shared libraries (the dynamic loader's work on them was ~0.18 s of
+# every start). ctcal reads PNG and JPEG through libpng and libjpeg-turbo itself
+# (targets/image_file.h); only tests and benchmarks that compare with cv::imread link
+# opencv_imgcodecs.
+set(CTCAL_OPENCV_LIBS opencv_core opencv_imgproc opencv_calib3d opencv_aruco)
+find_package(PNG REQUIRED)
+find_package(JPEG REQUIRED)
 find_package(apriltag CONFIG REQUIRED)
 if(NOT TARGET apriltag::apriltag OR NOT TARGET apriltag::apriltag-utils)
   message(FATAL_ERROR "apriltag found without its apriltag::apriltag/apriltag-utils targets")

@@ -5,7 +5,7 @@
 # to build-fuzz/findings/<target>/). Exit 1 when a target crashed, leaked or hung (> 10 s on one
 # input). docs/fuzzing.md has the targets, the hours run and the findings.
 #
-#   scripts/fuzz.sh [SECONDS] [TARGET ...]     TARGET: csv rig_yaml kalibr ros1_bag ros2_bag
+#   scripts/fuzz.sh [SECONDS] [TARGET ...]     TARGET: csv rig_yaml kalibr ros1_bag ros2_bag image
 #
 # Needs clang-14, libclang-rt-14-dev (the sanitizers) and libfuzzer-14-dev (the -fsanitize=fuzzer
 # runtime); the default build needs none of them.
@@ -14,7 +14,7 @@ ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SECONDS_EACH=${1:-600}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(csv rig_yaml kalibr ros1_bag ros2_bag)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(csv rig_yaml kalibr ros1_bag ros2_bag image)
 BUILD=${CTCAL_FUZZ_BUILD:-$ROOT/build-fuzz}
 
 cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \

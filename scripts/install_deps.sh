@@ -12,6 +12,7 @@ PACKAGES=(
   libmrcal-dev mrcal
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcairo2-dev libdeflate-dev zlib1g-dev
+  libpng-dev libjpeg62-turbo-dev
   fonts-dejavu-core
   clang-format
   poppler-utils opencv-doc visp-images-data
@@ -20,6 +21,8 @@ PACKAGES=(
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
 # libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt);
+# libpng-dev and libjpeg62-turbo-dev read the datasets' PNG / JPEG images and write the
+# simulator's PNGs (targets/src/image_file.cpp: OpenCV's imgcodecs is not linked into ctcal);
 # fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot_draw.h);
 # poppler-utils (pdftoppm, pdftotext), chromium and python3 (scripts/spec_sim.py, standard
 # library only) are called by tests; python3-numpy and python3-opencv are what the independent

@@ -4,9 +4,10 @@
 #include <cctype>
 #include <cstring>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+
+#include "ctcal/targets/image_file.h"
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
               "the ROS decoders read little-endian fields by copying them");
@@ -252,12 +253,10 @@ void CheckRosImage(const RosImage& image) {
 cv::Mat RosImageToMat(const RosImage& image) {
   CheckRosImage(image);
   if (image.compressed) {
-    const cv::Mat decoded = cv::imdecode(image.data, cv::IMREAD_UNCHANGED);
-    if (decoded.empty()) {
-      throw std::runtime_error("the " + image.encoding + " image of " +
-                               std::to_string(image.data.size()) + " bytes cannot be decoded");
-    }
-    return decoded;
+    // Throws "the <format> image of N bytes cannot be decoded: <why>".
+    return DecodeImage(
+        image.data.data(), image.data.size(),
+        "the " + image.encoding + " image of " + std::to_string(image.data.size()) + " bytes");
   }
   const auto [type, code] = MatTypeOf(image.encoding);
   const cv::Mat view(static_cast<int>(image.height), static_cast<int>(image.width), type,

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <tuple>
 #include <vector>
 
 #include "ctcal/sensors/dataset.h"
 #include "ctcal/sensors/ros_messages.h"
+#include "ctcal/targets/image_file.h"
 
 namespace ctcal::sim {
 namespace {
@@ -76,9 +76,7 @@ void WriteDatasetBag(const std::string& dataset_dir, const RigConfig& rig,
     }
     const std::string file =
         (fs::path(dataset_dir) / stream.sensor->name / "data" / stream.images[i].filename).string();
-    const cv::Mat image = cv::imread(file, cv::IMREAD_UNCHANGED);
-    if (image.empty())
-      throw std::runtime_error(file + ": cannot be read as an image");
+    const cv::Mat image = ReadImageFile(file);  // throws "cannot read image <file>: <why>"
     if (image.type() != CV_8UC1)
       throw std::runtime_error(file + ": not an 8-bit grey image (the bag's images are mono8)");
     bag.Write(stream.topic, "sensor_msgs/Image", t, EncodeRos1Mono8(t, image, frame));

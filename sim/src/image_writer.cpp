@@ -1,13 +1,13 @@
 #include "ctcal/sim/image_writer.h"
 
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 #include "ctcal/sensors/camera_model.h"
 #include "ctcal/sim/kinematics.h"
 #include "ctcal/sim/random.h"
 #include "ctcal/targets/board.h"
+#include "ctcal/targets/image_file.h"
 #include "ctcal/targets/renderer.h"
 
 namespace ctcal::sim {
@@ -64,8 +64,7 @@ void RenderImages(const SimulatedDataset& data, const Trajectory& traj, const st
         image = renderer.Render(pose_at(t_image), image_seed);
       }
       const fs::path file = folder / (std::to_string(ns) + ".png");
-      if (!cv::imwrite(file.string(), image))
-        throw std::runtime_error("cannot write " + file.string());
+      WritePngFile(file.string(), image);  // throws "cannot write <file>: <why>"
       if (progress)
         progress(++done, total);
     }

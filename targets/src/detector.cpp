@@ -1,6 +1,5 @@
 #include "ctcal/targets/detector.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <Eigen/Dense>
@@ -13,6 +12,7 @@
 #include <thread>
 
 #include "ctcal/targets/board_tracking.h"
+#include "ctcal/targets/image_file.h"
 #include "detector_internal.h"
 
 namespace ctcal {
@@ -292,9 +292,13 @@ std::vector<DetectionResult> Detector::DetectFiles(
     for (size_t c = next++; c < chunks; c = next++) {
       BoardTracker tracker(*this);
       for (size_t i = c * chunk; i < std::min(paths.size(), (c + 1) * chunk); ++i) {
-        const cv::Mat image = cv::imread(paths[i], cv::IMREAD_UNCHANGED);
+        cv::Mat image;
+        try {
+          image = ReadImageFile(paths[i]);
+        } catch (const std::exception& e) {
+          results[i].error = e.what();  // "cannot read image <path>: <why>"
+        }
         if (image.empty()) {
-          results[i].error = "cannot read image " + paths[i];
           tracker.Reset();
         } else {
           results[i] = tracker.Next(image);

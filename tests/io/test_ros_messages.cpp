@@ -233,8 +233,24 @@ TEST(RosMessages, UnsupportedOrShortImagesAreClearErrors) {
   garbage.compressed = true;
   garbage.encoding = "jpeg";
   garbage.data = {0xFF, 0xD8, 0x00, 0x01};
-  EXPECT_NO_THROW(CheckRosImage(garbage));                   // the format is one ctcal reads ...
-  EXPECT_THROW(RosImageToMat(garbage), std::runtime_error);  // ... the bytes are not
+  EXPECT_NO_THROW(CheckRosImage(garbage));  // the format is one ctcal reads, the bytes are not:
+  // the decoder's error, whatever the format field says
+  const auto error_of = [&](std::vector<std::uint8_t> bytes) -> std::string {
+    garbage.data = std::move(bytes);
+    try {
+      RosImageToMat(garbage);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_EQ(error_of({0xFF, 0xD8, 0x00, 0x01}),
+            "the jpeg image of 4 bytes cannot be decoded: neither PNG nor JPEG (it starts with ff "
+            "d8 00 01); ctcal reads PNG and JPEG images");
+  EXPECT_THAT(error_of({0xFF, 0xD8, 0xFF, 0xE0}),  // a JPEG's first bytes
+              HasSubstr("cannot be decoded: corrupt or truncated JPEG ("));
+  EXPECT_THAT(error_of({'B', 'M', 0, 1}),
+              HasSubstr("cannot be decoded: a BMP image; ctcal reads PNG and JPEG images"));
 }
 
 TEST(RosMessages, Ros1ImageMessageRoundTrips) {

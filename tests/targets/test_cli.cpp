@@ -164,7 +164,9 @@ TEST_F(Cli, DetectWritesCornersOfRenderedImages) {
   EXPECT_NE(run.out.find("5 images, 4 with the board"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("1 unreadable"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("warning: cam0: cannot read image " +
-                         (cam / "data" / "2000000000.png").string() + "\n"),
+                         (cam / "data" / "2000000000.png").string() +
+                         ": neither PNG nor JPEG (it starts with 6e 6f 74 20 61 20 70 6e); ctcal "
+                         "reads PNG and JPEG images\n"),
             std::string::npos)
       << run.out;
   const std::vector<CornerObservation> corners =

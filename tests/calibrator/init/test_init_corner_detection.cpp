@@ -144,7 +144,9 @@ TEST(InitCornerDetection, UnreadableImagesAmongGoodOnesAreOneWarningNamingTheFil
   ASSERT_EQ(summaries.size(), 1u);
   EXPECT_EQ(summaries[0].with_board, 3u);
   EXPECT_EQ(summaries[0].unreadable, 1u);
-  EXPECT_THAT(lines, ::testing::Contains("warning: cam0: cannot read image " + bad.string()));
+  EXPECT_THAT(lines, ::testing::Contains("warning: cam0: cannot read image " + bad.string() +
+                                         ": neither PNG nor JPEG (it starts with 6e 6f 74 20 61 "
+                                         "20 70 6e); ctcal reads PNG and JPEG images"));
   fs::remove_all(r.dir);
   fs::remove_all(out);
 

@@ -48,8 +48,9 @@ RosImage DecodeRosImage(const std::uint8_t* bytes, std::size_t size, RosWire wir
 
 // The pixels as the detector takes them (CV_8U or CV_16U, grey, BGR or BGRA): mono8, mono16 (and
 // their 8UC1/16UC1 aliases), rgb8, bgr8, rgba8, bgra8; a CompressedImage whose format names jpeg
-// or png, through OpenCV. Throws std::runtime_error for another encoding (naming it), a data
-// block smaller than step x height, or bytes OpenCV cannot decode.
+// or png, through DecodeImage (ctcal/targets/image_file.h: the format told by the bytes, not the
+// name). Throws std::runtime_error for another encoding (naming it), a data block smaller than
+// step x height, or bytes that are no valid PNG or JPEG.
 cv::Mat RosImageToMat(const RosImage& image);
 
 // Checks that `image` is one RosImageToMat takes (its encoding or format, its size against its

@@ -145,13 +145,15 @@ class Detector {
   const Board& board() const { return board_; }
   const DetectorOptions& options() const { return options_; }
 
-  // Any of CV_8U / CV_16U with 1, 3 or 4 channels (colour is BGR/BGRA as cv::imread gives it).
+  // Any of CV_8U / CV_16U with 1, 3 or 4 channels (colour is BGR/BGRA as ReadImageFile and
+  // cv::imread give it).
   // Thread-safe: concurrent calls use separate libapriltag detectors.
   DetectionResult Detect(const cv::Mat& image) const;
-  // Reads every file (cv::IMREAD_UNCHANGED) and detects, `options().threads` images at a time
-  // (with `options().track`: the files are one camera's frames in time order, tracked in chunks);
-  // result i belongs to paths[i] whatever the thread schedule. `progress(done, total)` is called
-  // from one thread at a time.
+  // Reads every file (ReadImageFile: PNG or JPEG, unchanged) and detects, `options().threads`
+  // images at a time (with `options().track`: the files are one camera's frames in time order,
+  // tracked in chunks); result i belongs to paths[i] whatever the thread schedule, a file that
+  // cannot be read gets ReadImageFile's error. `progress(done, total)` is called from one thread
+  // at a time.
   std::vector<DetectionResult> DetectFiles(
       const std::vector<std::string>& paths,
       const std::function<void(size_t, size_t)>& progress = nullptr) const;
