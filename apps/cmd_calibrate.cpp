@@ -36,6 +36,7 @@
 #include "ctcal/sensors/kalibr_files.h"
 #include "ctcal/sensors/rig_yaml.h"
 #include "ctcal/targets/target_config.h"
+#include "huge_page_heap.h"
 
 namespace ctcal::app {
 
@@ -404,6 +405,8 @@ int RunCalibrate(int argc, char** argv) {
     return cli.InputError(e.what());
   }
   log("time: " + report::FormatStageTime(clock.Lap("load")));
+  if (HeapOnHugePages())
+    log("heap: on transparent huge pages (GLIBC_TUNABLES glibc.malloc.hugetlb=1)");
   // Cameras given as images only are detected first; their corners go to OUT/<camera>/.
   if (const auto failed = Guarded(cli, log_file, [&] {
         DetectMissingCorners(rig, data_dir, out_dir, options.threads, &data, log, track);
