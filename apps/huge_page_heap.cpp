@@ -17,10 +17,11 @@ std::optional<std::string> HugePageTunables(const char* current, const std::stri
 
 void ReexecWithHugePageHeap(char** argv) {
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 35))
-  // Why: the calibration touches ~450 MB of fresh heap pages over a run (its normal equations,
-  // factors and Jacobian scratch, allocated per solve), one page fault per 4 KiB page, which on a
-  // virtual machine cost 15-20 % of the CPU (EuRoC's 36 s: 111 k faults, 1.2 s of system time).
-  // With the heap advised for 2 MiB pages: 41 k faults (docs/performance.md).
+  // Why: the calibration touches ~400 MB of fresh heap pages over a run (its normal equations,
+  // factors and Jacobian scratch, allocated per solve), one page fault per 4 KiB page: ~10 % of
+  // its CPU samples in the kernel's fault path on a virtual machine (EuRoC's 36 s: 96 k faults,
+  // 0.80 s of system time). With the heap advised for 2 MiB pages: 41 k faults, 0.56 s, the whole
+  // command 0.93x, the re-execution included (docs/performance.md, issue 23 session 16).
   std::string enabled;
   std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
   std::getline(thp, enabled);

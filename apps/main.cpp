@@ -53,8 +53,8 @@ int main(int argc, char** argv) {
     std::printf("ctcal %s\n", CTCAL_VERSION);
     return 0;
   }
-  // The calibration's heap on huge pages (huge_page_heap.h): its page faults were 15-20 % of
-  // its CPU. Before anything is allocated that a re-execution would waste.
+  // The calibration's heap on huge pages (huge_page_heap.h): its page faults were ~10 % of its
+  // CPU. Before anything is allocated that a re-execution would waste.
   if (cmd == "calibrate")
     ctcal::app::ReexecWithHugePageHeap(argv);
   for (const Command& c : kCommands) {
