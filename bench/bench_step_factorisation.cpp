@@ -15,6 +15,7 @@
 #include <random>
 #include <vector>
 
+#include "../calibrator/src/solver/normal_equations.h"
 #include "../calibrator/src/solver/sparse_cholesky.h"
 
 namespace {
@@ -127,6 +128,40 @@ void BM_AnalyseAndFactorize(benchmark::State& state) {
   }
 }
 
+// The step's Schur complement on the border (SubtractBorderSchur) after one factorisation:
+// range(0) knots, range(1) 0 EuRoC-shaped / 1 demo-shaped, range(2) border columns, range(3)
+// 0 half solves / 1 chunks of full solves, on 2 threads.
+void BM_BorderSchur(benchmark::State& state) {
+  const int knots = static_cast<int>(state.range(0));
+  const SparseColMajor H =
+      state.range(1) == 0 ? EurocShapedNormalEquations(knots) : DemoShapedNormalEquations(knots);
+  const int c = static_cast<int>(state.range(2));
+  const auto solves = state.range(3) == 0 ? ctcal::SchurSolves::kHalf : ctcal::SchurSolves::kChunks;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd H_nc(H.rows(), c);
+  for (Eigen::Index i = 0; i < H_nc.size(); ++i)
+    H_nc.data()[i] = normal(rng);
+  const Eigen::VectorXd g = Eigen::VectorXd::Ones(H.rows());
+  const Eigen::MatrixXd H_cc = Eigen::MatrixXd::Identity(c, c) * 1e6;
+  ctcal::SparseCholesky chol;
+  chol.Factorize(H, Eigen::VectorXd::Constant(H.rows(), 1e-8));
+  Eigen::VectorXd h;
+  for (auto _ : state) {
+    Eigen::MatrixXd S = H_cc;
+    benchmark::DoNotOptimize(
+        ctcal::SubtractBorderSchur(&chol, H_nc, 2, ctcal::kSchurColumns, solves, &g, &S, &h));
+    chol.ReleaseSolveWorkspace();
+  }
+}
+
+BENCHMARK(BM_BorderSchur)
+    ->Args({5115, 0, 33, 0})
+    ->Args({5115, 0, 33, 1})
+    ->Args({2062, 1, 97, 0})
+    ->Args({2062, 1, 97, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Eigen)->Arg(5115)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_AnalyseAndFactorize)->Args({5115, 0})->Args({2062, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SparseCholesky)

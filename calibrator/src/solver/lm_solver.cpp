@@ -140,11 +140,14 @@ class LevenbergMarquardt::Impl {
     const std::size_t h = static_cast<std::size_t>(H_->NonZeros()) * 12 + (n * c + c * c) * 8;
     // H once (the threads share it, PartitionBlocks), the threads' H_cc, the step's damped copy
     // of H_nn in the factorisation's order with its map (SparseCholesky), and each thread's
-    // right-hand sides and solutions (SolveStep: kSchurColumns at a time; B and Y, and
-    // SparseCholesky's permuted B, result and workspace).
+    // right-hand sides and solutions (SolveStep: kSchurColumns at a time; SparseCholesky's
+    // permuted B, CHOLMOD's result and workspace). Not W = R^-T H_nc of the half solves
+    // (SchurSolves::kHalf): it is the border's rows of the Cholesky factor of the whole H, which
+    // Ceres' factorisation holds as well (AMD orders the dense border last), the part
+    // CeresBytes() leaves out as common to both.
     return h + static_cast<std::size_t>(threads_ - 1) * c * c * 8 +
            static_cast<std::size_t>(H_->NonZeros()) * 16 +
-           static_cast<std::size_t>(SolvingThreads()) * 5 * n *
+           static_cast<std::size_t>(SolvingThreads()) * 3 * n *
                static_cast<std::size_t>(ColumnsPerSolve() + 1) * 8;
   }
   // SolveStep's threads and border columns per solve: kSchurColumns in flight over the threads,
@@ -512,7 +515,7 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   Eigen::VectorXd D = H_->Diagonal().cwiseMax(o_.min_lm_diagonal).cwiseMin(o_.max_lm_diagonal);
   D /= radius;
   step->resize(n + c);
-  Eigen::VectorXd y_g;  // A_nn^-1 g_n
+  Eigen::VectorXd h_g;  // H_cn A_nn^-1 g_n
   Eigen::MatrixXd S;    // the Schur complement on the border
   if (n > 0) {
     if (llt_ == nullptr)
@@ -520,14 +523,16 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
                                 : std::make_shared<SparseCholesky>();
     if (!llt_->Factorize(H_->H_nn(), D))  // A_nn = H_nn + D's first n
       return false;
-    // S = A_cc - H_cn A_nn^-1 H_nc a few border columns at a time on the threads (g_n with the
-    // first): A_nn^-1 H_nc whole (n x c, and once more as the solve's right-hand side) was the
-    // solver's largest block after H (EuRoC's 36 s: 2 x 9 MB), for one more single-column solve
-    // for d_n below; on one thread the demo rig's 97 border columns were ~3/4 of its step.
-    S = H_->H_cc();
-    const Eigen::VectorXd g_n = g_.head(n);
-    if (!SubtractBorderSchur(llt_.get(), H_->H_nc(), threads_, kSchurColumns, &g_n, &S, &y_g))
-      return false;
+    // S = A_cc - H_cn A_nn^-1 H_nc = W^T W on the threads, W = R^-T H_nc by half solves (g_n's
+    // with them): the two triangular solves of each border column were ~3/4 of the demo rig's step
+    // on one thread, and one does (EuRoC's 36 s: 33 -> 16 ms a step on two threads).
+    if (c > 0) {
+      S = H_->H_cc();
+      const Eigen::VectorXd g_n = g_.head(n);
+      if (!SubtractBorderSchur(llt_.get(), H_->H_nc(), threads_, kSchurColumns, SchurSolves::kHalf,
+                               &g_n, &S, &h_g))
+        return false;
+    }
   }
   if (c > 0) {
     if (n == 0)
@@ -535,7 +540,7 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     S.diagonal() += D.tail(c);
     Eigen::VectorXd rhs = -g_.tail(c);
     if (n > 0)
-      rhs.noalias() += H_->H_nc().transpose() * y_g;
+      rhs += h_g;
     const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(S);
     if (llt.info() != Eigen::Success)
       return false;
@@ -550,14 +555,12 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
   }
   if (n > 0) {
     // d_n = -A_nn^-1 (g_n + H_nc d_c).
-    if (c == 0) {
-      step->head(n) = -y_g;
-    } else {
-      Eigen::MatrixXd d_n;
-      if (!llt_->Solve(g_.head(n) + H_->H_nc() * step->tail(c), &d_n))
-        return false;
-      step->head(n) = -d_n;
-    }
+    Eigen::MatrixXd d_n;
+    if (!llt_->Solve(c == 0 ? Eigen::MatrixXd(g_.head(n))
+                            : Eigen::MatrixXd(g_.head(n) + H_->H_nc() * step->tail(c)),
+                     &d_n))
+      return false;
+    step->head(n) = -d_n;
   }
   if (llt_ != nullptr)
     llt_->ReleaseSolveWorkspace();
@@ -785,7 +788,8 @@ MarginalInformation LevenbergMarquardt::Impl::MarginalizeToBorder() {
   MarginalInformation out;
   out.nuisance_dimension = H_->n();
   out.information = MarginalizeNuisance(H_.get(), &out.nuisance_damping,
-                                        shared_ != nullptr ? &shared_->chol : nullptr, threads_);
+                                        shared_ != nullptr ? &shared_->chol : nullptr, threads_,
+                                        SchurSolves::kHalf);
   H_.reset();
   return out;
 }

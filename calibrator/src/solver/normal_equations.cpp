@@ -221,9 +221,69 @@ int SchurColumnsPerSolve(int threads, int c, int columns_in_flight) {
   return std::max(2, columns_in_flight / SchurThreads(threads, c));
 }
 
-bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
-                         int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
-                         Eigen::VectorXd* y_g) {
+std::size_t SchurHalfBytes(std::size_t n, std::size_t c) {
+  return n * (c + 1) * sizeof(double);
+}
+
+bool HalfSolveBorder(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                     int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* W) {
+  const auto n = static_cast<int>(H_nc.rows()), c = static_cast<int>(H_nc.cols());
+  const int T = SchurThreads(threads, c);
+  const int columns = SchurColumnsPerSolve(threads, c, columns_in_flight);
+  // With g_n: one chunk at least, for g_n alone when there is no border column.
+  const int chunks = std::max(g_n != nullptr ? 1 : 0, (c + columns - 1) / columns);
+  W->resize(n, c + (g_n != nullptr ? 1 : 0));
+  std::vector<SparseCholesky::Workspace> workspaces(static_cast<std::size_t>(T));
+  std::vector<char> solved(static_cast<std::size_t>(T), 1);
+  ParallelFor(T, static_cast<std::size_t>(T), [&](std::size_t t) {
+    for (int chunk = static_cast<int>(t); chunk < chunks; chunk += T) {
+      const int j = chunk * columns;
+      const int w = std::min(columns, c - j);
+      const Eigen::VectorXd* last = chunk == chunks - 1 ? g_n : nullptr;
+      // W's columns j .. j + w, and g_n's (W's last, c) right after them in the last chunk.
+      if (!llt->HalfSolve(H_nc.middleCols(j, w), last,
+                          W->middleCols(j, w + (last != nullptr ? 1 : 0)), &workspaces[t])) {
+        solved[t] = 0;
+        return;
+      }
+    }
+    workspaces[t].Release();
+  });
+  return std::find(solved.begin(), solved.end(), 0) == solved.end();
+}
+
+void SubtractGram(const Eigen::Ref<const Eigen::MatrixXd>& W, int threads, Eigen::MatrixXd* S) {
+  const auto c = static_cast<int>(W.cols());
+  if (c == 0)
+    return;
+  // Column blocks fixed by the thread count: the bits do not depend on the schedule.
+  const int P = std::max(1, std::min(threads, c));
+  ParallelFor(P, static_cast<std::size_t>(P), [&](std::size_t t) {
+    const int j0 = static_cast<int>(t) * c / P, j1 = (static_cast<int>(t) + 1) * c / P;
+    S->middleCols(j0, j1 - j0).noalias() -= W.transpose() * W.middleCols(j0, j1 - j0);
+  });
+}
+
+namespace {
+
+// kHalf: S -= W_c^T W_c and h_g = W_c^T w_g (H_cn A^-1 g_n = (R^-T H_nc)^T (R^-T g_n)).
+bool SubtractBorderSchurHalf(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                             int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
+                             Eigen::VectorXd* h_g) {
+  const auto c = static_cast<int>(H_nc.cols());
+  Eigen::MatrixXd W;
+  if (!HalfSolveBorder(llt, H_nc, threads, columns_in_flight, g_n, &W))
+    return false;
+  SubtractGram(W.leftCols(c), threads, S);
+  if (g_n != nullptr)
+    *h_g = W.leftCols(c).transpose() * W.col(c);
+  return true;
+}
+
+// kChunks: A_nn^-1 [H_nc | g_n] a chunk at a time, S -= H_nc^T (A_nn^-1 H_J) per chunk.
+bool SubtractBorderSchurChunks(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                               int columns_in_flight, const Eigen::VectorXd* g_n,
+                               Eigen::MatrixXd* S, Eigen::VectorXd* h_g) {
   const auto n = static_cast<int>(H_nc.rows()), c = static_cast<int>(H_nc.cols());
   const int T = SchurThreads(threads, c);
   const int columns = SchurColumnsPerSolve(threads, c, columns_in_flight);
@@ -231,6 +291,7 @@ bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int t
   const int chunks = std::max(g_n != nullptr ? 1 : 0, (c + columns - 1) / columns);
   std::vector<SparseCholesky::Workspace> workspaces(static_cast<std::size_t>(T - 1));
   std::vector<char> solved(static_cast<std::size_t>(T), 1);
+  Eigen::VectorXd y_g;  // A_nn^-1 g_n
   ParallelFor(T, static_cast<std::size_t>(T), [&](std::size_t t) {
     Eigen::MatrixXd B, Y;
     for (int chunk = static_cast<int>(t); chunk < chunks; chunk += T) {
@@ -249,14 +310,29 @@ bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int t
       if (w > 0)
         S->middleCols(j, w).noalias() -= H_nc.transpose() * Y.leftCols(w);
       if (g_col)
-        *y_g = Y.col(w);
+        y_g = Y.col(w);
     }
   });
-  return std::find(solved.begin(), solved.end(), 0) == solved.end();
+  if (std::find(solved.begin(), solved.end(), 0) != solved.end())
+    return false;
+  if (g_n != nullptr)
+    *h_g = H_nc.transpose() * y_g;
+  return true;
+}
+
+}  // namespace
+
+bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                         int columns_in_flight, SchurSolves solves, const Eigen::VectorXd* g_n,
+                         Eigen::MatrixXd* S, Eigen::VectorXd* h_g) {
+  return solves == SchurSolves::kHalf
+             ? SubtractBorderSchurHalf(llt, H_nc, threads, columns_in_flight, g_n, S, h_g)
+             : SubtractBorderSchurChunks(llt, H_nc, threads, columns_in_flight, g_n, S, h_g);
 }
 
 Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
-                                    SparseCholesky* factorisation, int threads) {
+                                    SparseCholesky* factorisation, int threads,
+                                    SchurSolves solves) {
   using SparseColMajor = NormalEquations::SparseColMajor;
   const int n = normal->n(), c = normal->c();
   *nuisance_damping = 0.0;
@@ -324,7 +400,19 @@ Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_da
     throw std::runtime_error("covariance: the nuisance information cannot be factored");
   H_nn = SparseColMajor();  // the factor holds what the solve needs
   Eigen::MatrixXd information = H_cc;
-  if (!SubtractBorderSchur(&llt, H_nc, threads, kSchurColumns, nullptr, &information, nullptr))
+  bool solved = false;
+  if (solves == SchurSolves::kHalf) {
+    // W = R^-T H_nc takes H_nc's place: it is freed before the product.
+    Eigen::MatrixXd W;
+    solved = HalfSolveBorder(&llt, H_nc, threads, kSchurColumns, nullptr, &W);
+    H_nc = Eigen::MatrixXd();
+    if (solved)
+      SubtractGram(W, threads, &information);
+  } else {
+    solved = SubtractBorderSchur(&llt, H_nc, threads, kSchurColumns, solves, nullptr, &information,
+                                 nullptr);
+  }
+  if (!solved)
     throw std::runtime_error("covariance: the nuisance information's solve is not finite");
   llt.ReleaseNumeric();  // and its solves' workspace
   return 0.5 * (information + information.transpose()).eval();

@@ -102,6 +102,17 @@ class NormalEquations {
   Eigen::MatrixXd G_;      // scratch of AddBlock
 };
 
+// How SubtractBorderSchur applies A_nn^-1 to the border columns.
+//   kHalf:   W = R^-T [H_nc | g_n] by half solves (A_nn = R^T R, SparseCholesky::HalfSolve), held
+//            whole, and S -= W_c^T W_c by matrix products: one triangular solve per column
+//            instead of two, for n x (c + 1) more memory (SchurHalfBytes).
+//   kChunks: A_nn^-1 [H_nc | g_n] by full solves a few columns at a time, each chunk subtracted
+//            before the next: no n x c buffer.
+enum class SchurSolves { kHalf, kChunks };
+
+// What kHalf holds beyond kChunks' buffers: W, n x (c + 1) doubles.
+std::size_t SchurHalfBytes(std::size_t n, std::size_t c);
+
 // The border's information with the nuisance states marginalised, H_cc - H_cn H_nn^-1 H_nc (H_nn
 // factored by CHOLMOD, SparseCholesky). A nuisance state no residual touches (zero diagonal) is
 // left out exactly; a singular H_nn is damped by 1e-12, 1e-9 or 1e-6 of its largest diagonal, the
@@ -109,24 +120,32 @@ class NormalEquations {
 // released). Throws std::runtime_error when H_nn cannot be factored even damped. `factorisation`:
 // the one the solve used (its analysis reused when H_nn has its pattern; its values freed
 // afterwards), or null. `threads` solve its columns (SubtractBorderSchur, kSchurColumns in
-// flight).
+// flight), by `solves`.
 Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_damping,
-                                    SparseCholesky* factorisation = nullptr, int threads = 1);
+                                    SparseCholesky* factorisation = nullptr, int threads = 1,
+                                    SchurSolves solves = SchurSolves::kChunks);
 
 // Border columns in flight in the Schur complement's solves (SubtractBorderSchur: the solver's
-// step and the covariance): each solve reads the whole factor, each column costs 5 x 8 bytes per
-// nuisance parameter (LevenbergMarquardt::NormalEquationsBytes).
+// step and the covariance): each solve reads the whole factor, each column costs 3 x 8 bytes per
+// nuisance parameter with kHalf, 5 x 8 with kChunks (LevenbergMarquardt::NormalEquationsBytes).
 constexpr int kSchurColumns = 8;
 
 // *S -= H_nc^T A_nn^-1 H_nc with A_nn factored in `llt` (*S holds A_cc on entry: the Schur
-// complement on the border), a few columns at a time: A_nn^-1 H_nc whole would be n x c more.
-// `columns_in_flight` columns are solved at once over all `threads` (each its own workspace), so
-// the memory does not grow with the threads; each chunk is solved and subtracted alike on any
-// thread, so S depends on the thread count (the chunks' width) but not on the schedule. With
-// `g_n`, also *y_g = A_nn^-1 g_n (solved with the first chunk). False when a solve is not finite.
+// complement on the border), by `solves` (above). `columns_in_flight` columns are solved at once
+// over all `threads` (each its own workspace), so the solves' buffers do not grow with the
+// threads; the chunks and the products' column blocks are fixed by the thread count, so S depends
+// on it but not on the schedule. With `g_n`, also *h_g = H_nc^T A_nn^-1 g_n (solved with the
+// first chunk, or as W's last column). False when a solve is not finite.
 bool SubtractBorderSchur(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
-                         int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* S,
-                         Eigen::VectorXd* y_g);
+                         int columns_in_flight, SchurSolves solves, const Eigen::VectorXd* g_n,
+                         Eigen::MatrixXd* S, Eigen::VectorXd* h_g);
+
+// kHalf's two parts. *W = R^-T [H_nc | g_n] (A_nn = R^T R, SparseCholesky::HalfSolve; g_n's
+// column last when given), solved as SubtractBorderSchur solves its chunks; false when a solve is
+// not finite. *S -= W^T W, column blocks fixed by the thread count.
+bool HalfSolveBorder(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
+                     int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* W);
+void SubtractGram(const Eigen::Ref<const Eigen::MatrixXd>& W, int threads, Eigen::MatrixXd* S);
 
 // The threads SubtractBorderSchur uses for `c` border columns (no more than one per two columns),
 // and its columns per solve (the columns in flight shared among them, two at least).

@@ -80,6 +80,11 @@ struct SparseCholesky::Impl {
   bool SameAsAnalysed(const SparseColMajor& lower) const;
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
+  bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
+                 Eigen::Ref<Eigen::MatrixXd> X, Workspace::Impl* w) const;
+  // B's columns (then `last`'s) permuted into w->rhs and handed to CHOLMOD as `b`.
+  cholmod_dense PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
+                            Workspace::Impl* w) const;
 
   Kind kind_;
   cholmod_common common_;
@@ -90,6 +95,8 @@ struct SparseCholesky::Impl {
   std::vector<int> col_start_, row_index_, target_;
   bool upper_ = false;
   std::vector<double> values_;
+  // D^-1/2 of a simplicial LDL^T factor, in the factor's order (HalfSolve); empty for LL^T.
+  std::vector<double> half_scale_;
   Workspace solve_;  // of Solve(B, X)
 };
 
@@ -130,6 +137,12 @@ bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
                            Workspace* workspace) const {
   return impl_->Solve(B, X, workspace->impl_.get());
+}
+
+bool SparseCholesky::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                               const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
+                               Workspace* workspace) const {
+  return impl_->HalfSolve(B, last, X, workspace->impl_.get());
 }
 
 void SparseCholesky::ReleaseSolveWorkspace() {
@@ -328,25 +341,32 @@ bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::V
   // zero pivot stops it); the callers rely on the refusal (a step's invalid damping, the
   // covariance's singular H_nn). A is positive definite iff every pivot d_j > 0, the pivots LL^T
   // would take the roots of; D sits on L's unit diagonal (cholmod_core.h).
+  half_scale_.clear();
   if (!factor_->is_super && !factor_->is_ll) {
     const int* Lp = static_cast<const int*>(factor_->p);
     const double* Lx = static_cast<const double*>(factor_->x);
+    half_scale_.resize(static_cast<std::size_t>(n));
     for (int j = 0; j < n; ++j) {
       if (!(Lx[Lp[j]] > 0.0) || !std::isfinite(Lx[Lp[j]]))
         return false;
+      half_scale_[static_cast<std::size_t>(j)] = 1.0 / std::sqrt(Lx[Lp[j]]);
     }
   }
   return true;
 }
 
-bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
-                                 Workspace::Impl* w) const {
-  const auto n = static_cast<std::size_t>(B.rows());
-  const auto k = static_cast<std::size_t>(B.cols());
+cholmod_dense SparseCholesky::Impl::PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                                                const Eigen::VectorXd* last,
+                                                Workspace::Impl* w) const {
+  const std::size_t n = perm_.size();
+  const auto k = static_cast<std::size_t>(B.cols()) + (last != nullptr ? 1 : 0);
   w->rhs.resize(n * k);
   for (std::size_t c = 0; c < k; ++c) {
+    const double* column = c < static_cast<std::size_t>(B.cols())
+                               ? B.data() + static_cast<Eigen::Index>(c) * B.outerStride()
+                               : last->data();
     for (std::size_t q = 0; q < n; ++q)
-      w->rhs[c * n + q] = B(perm_[q], static_cast<Eigen::Index>(c));
+      w->rhs[c * n + q] = column[perm_[q]];
   }
   cholmod_dense b{};
   b.nrow = n;
@@ -356,16 +376,46 @@ bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
   b.x = w->rhs.data();
   b.xtype = CHOLMOD_REAL;
   b.dtype = CHOLMOD_DOUBLE;
+  return b;
+}
+
+bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
+                                 Workspace::Impl* w) const {
+  cholmod_dense b = PermutedRhs(B, nullptr, w);
   // The factor is only read (CHOLMOD_A on a supernodal LL^T): several workspaces may solve at once.
   if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
     return false;
   const double* x = static_cast<const double*>(w->x->x);
   X->resize(B.rows(), B.cols());
-  for (std::size_t c = 0; c < k; ++c) {
-    for (std::size_t q = 0; q < n; ++q)
-      (*X)(perm_[q], static_cast<Eigen::Index>(c)) = x[c * w->x->d + q];
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    for (std::size_t q = 0; q < perm_.size(); ++q)
+      (*X)(perm_[q], c) = x[static_cast<std::size_t>(c) * w->x->d + q];
   }
   return X->allFinite();
+}
+
+// P A P^T = L D L^T (D = I for LL^T; the order is P, CHOLMOD's own being the natural one), so
+// A^-1 = (D^1/2 L^T P)^-1 (D^1/2 L^T P)^-T and R^-T B = D^-1/2 L^-1 (P B): CHOLMOD_L solves with
+// L alone (its unit diagonal for LDL^T), and the rows are scaled by D^-1/2.
+bool SparseCholesky::Impl::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                                     const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
+                                     Workspace::Impl* w) const {
+  cholmod_dense b = PermutedRhs(B, last, w);
+  if (!cholmod_solve2(CHOLMOD_L, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
+    return false;
+  const double* x = static_cast<const double*>(w->x->x);
+  const std::size_t n = perm_.size();
+  for (Eigen::Index c = 0; c < X.cols(); ++c) {
+    const double* column = x + static_cast<std::size_t>(c) * w->x->d;
+    if (half_scale_.empty()) {
+      for (std::size_t q = 0; q < n; ++q)
+        X(static_cast<Eigen::Index>(q), c) = column[q];
+    } else {
+      for (std::size_t q = 0; q < n; ++q)
+        X(static_cast<Eigen::Index>(q), c) = column[q] * half_scale_[q];
+    }
+  }
+  return X.allFinite();
 }
 
 }  // namespace ctcal

@@ -73,6 +73,16 @@ class SparseCholesky {
   // (the factor is only read).
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace* workspace) const;
 
+  // The factor's half of a solve: X = R^-T B for A + diag(d) = R^T R (in CHOLMOD's terms
+  // R = D^1/2 L^T P, D the identity for an LL^T factor), so that B^T (A + diag(d))^-1 C = X^T Y
+  // with Y the half solve of C. One triangular solve instead of Solve's two: the Schur complement
+  // on the border needs only these products (SubtractBorderSchur). X's rows are in the factor's
+  // order (meaningful only in such products). With `last`, B's columns are followed by it (B may
+  // have none), and X has one column more than B. False when X is not finite. Like Solve with a
+  // workspace, several threads may half-solve at once.
+  bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
+                 Eigen::Ref<Eigen::MatrixXd> X, Workspace* workspace) const;
+
   // Frees the solves' workspace (n x columns, ~3 copies of B) until the next Solve: it would
   // otherwise sit beside the next Jacobian pass, the solve's memory peak.
   void ReleaseSolveWorkspace();

@@ -51,19 +51,24 @@ TEST(BorderSchur, MatchesTheDenseComplementOnAnyThreadCount) {
     for (int i = 0; i < n; ++i)
       g_n(i) = normal(rng);
     const Eigen::MatrixXd expected = H_cc - H_nc.transpose() * reference.solve(H_nc);
-    const Eigen::VectorXd expected_y = reference.solve(g_n);
+    const Eigen::VectorXd expected_h = H_nc.transpose() * reference.solve(g_n);
     for (const int threads : {1, 2, 3}) {
       SCOPED_TRACE(testing::Message() << c << " border columns, " << threads << " threads");
-      Eigen::MatrixXd S = H_cc, again = H_cc;
-      Eigen::VectorXd y, y_again;
-      ASSERT_TRUE(SubtractBorderSchur(&llt, H_nc, threads, 8, &g_n, &S, &y));
-      ASSERT_TRUE(SubtractBorderSchur(&llt, H_nc, threads, 8, &g_n, &again, &y_again));
-      EXPECT_LE((S - expected).norm(), 1e-10 * (1.0 + expected.norm()));
-      EXPECT_LE((y - expected_y).norm(), 1e-10 * expected_y.norm());
-      EXPECT_TRUE(S == again && y == y_again);  // the same bits, run to run
-      Eigen::MatrixXd without_g = H_cc;
-      ASSERT_TRUE(SubtractBorderSchur(&llt, H_nc, threads, 8, nullptr, &without_g, nullptr));
-      EXPECT_LE((without_g - expected).norm(), 1e-10 * (1.0 + expected.norm()));
+      for (const SchurSolves solves : {SchurSolves::kHalf, SchurSolves::kChunks}) {
+        SCOPED_TRACE(solves == SchurSolves::kHalf ? "half solves" : "chunks");
+        Eigen::MatrixXd S = H_cc, again = H_cc;
+        Eigen::VectorXd h, h_again;
+        ASSERT_TRUE(SubtractBorderSchur(&llt, H_nc, threads, 8, solves, &g_n, &S, &h));
+        ASSERT_TRUE(SubtractBorderSchur(&llt, H_nc, threads, 8, solves, &g_n, &again, &h_again));
+        EXPECT_LE((S - expected).norm(), 1e-10 * (1.0 + expected.norm()));
+        ASSERT_EQ(h.size(), c);
+        EXPECT_LE((h - expected_h).norm(), 1e-10 * (1.0 + expected_h.norm()));
+        EXPECT_TRUE(S == again && h == h_again);  // the same bits, run to run
+        Eigen::MatrixXd without_g = H_cc;
+        ASSERT_TRUE(
+            SubtractBorderSchur(&llt, H_nc, threads, 8, solves, nullptr, &without_g, nullptr));
+        EXPECT_LE((without_g - expected).norm(), 1e-10 * (1.0 + expected.norm()));
+      }
     }
   }
 }

@@ -138,6 +138,42 @@ TEST_P(SparseCholeskyOf, KindSolvesOnSeveralThreadsWithTheSameBits) {
     EXPECT_EQ(same[t], kRounds) << "thread " << t;
 }
 
+// The half solve X = R^-T B (A + diag(d) = R^T R) of the Schur complement: B^T A^-1 C = X^T Y
+// against the dense inverse, for the simplicial LDL^T (its D scaled in) and the supernodal LL^T
+// alike, with and without a last column appended, B with no column, several workspaces.
+TEST_P(SparseCholeskyOf, KindHalfSolvesGiveTheInverseAsAProduct) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const SparseColMajor A = GetParam() ? DenseLower(120, &rng) : BandWithBiases(150, &rng, 1.0);
+  const auto n = static_cast<int>(A.rows());
+  const Eigen::VectorXd d = Eigen::VectorXd::Constant(n, 0.3);
+  SparseCholesky chol;
+  ASSERT_TRUE(chol.Factorize(A, d));
+  ASSERT_EQ(chol.Supernodal(), GetParam());
+  const Eigen::MatrixXd inverse = Dense(A, d).inverse();
+  Eigen::MatrixXd B(n, 5), C(n, 3);
+  for (int i = 0; i < B.size(); ++i)
+    B.data()[i] = normal(rng);
+  for (int i = 0; i < C.size(); ++i)
+    C.data()[i] = normal(rng);
+  const Eigen::VectorXd g = C.col(2);
+  SparseCholesky::Workspace first, second;
+  Eigen::MatrixXd X(n, 5), Y(n, 3), Z(n, 1);
+  ASSERT_TRUE(chol.HalfSolve(B, nullptr, X, &first));
+  // C's first two columns, then g as the appended last one: Y is C's half solve.
+  ASSERT_TRUE(chol.HalfSolve(C.leftCols(2), &g, Y, &second));
+  ASSERT_TRUE(chol.HalfSolve(C.leftCols(0), &g, Z, &first));
+  const Eigen::MatrixXd expected = B.transpose() * inverse * C;
+  EXPECT_LE((X.transpose() * Y - expected).norm(), 1e-10 * expected.norm());
+  const Eigen::MatrixXd BtAB = B.transpose() * inverse * B;
+  EXPECT_LE((X.transpose() * X - BtAB).norm(), 1e-10 * BtAB.norm());
+  EXPECT_EQ(Z.col(0), Y.col(2));  // the same column, the same bits
+  // A full solve is the half solve's product: x^T (A^-1 b) = (R^-T x)^T (R^-T b).
+  Eigen::MatrixXd full;
+  ASSERT_TRUE(chol.Solve(C, &full));
+  EXPECT_LE((X.transpose() * Y - B.transpose() * full).norm(), 1e-10 * expected.norm());
+}
+
 // The same band with its rows and columns symmetrically permuted at random: its natural order
 // fills far more than a fill-reducing one.
 SparseColMajor Scrambled(const SparseColMajor& lower, std::mt19937* rng) {
