@@ -193,6 +193,7 @@ class LevenbergMarquardt::Impl {
   int num_residuals_ = 0;
   std::size_t jacobian_values_ = 0;      // rows x tangent columns over the residual blocks
   std::shared_ptr<SparseCholesky> llt_;  // of the damped H_nn, kept for the solve's steps
+  bool pattern_analysed_ = false;        // llt_ has H_nn's pattern (after a step's Factorize)
   const std::shared_ptr<NuisanceFactorisation> shared_;  // the caller's, or null
   std::vector<double*> border_;
   bool final_point_ = false;  // H_ holds the normal equations at the solve's final point
@@ -521,7 +522,10 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     if (llt_ == nullptr)
       llt_ = shared_ != nullptr ? std::shared_ptr<SparseCholesky>(shared_, &shared_->chol)
                                 : std::make_shared<SparseCholesky>();
-    if (!llt_->Factorize(H_->H_nn(), D))  // A_nn = H_nn + D's first n
+    // A_nn = H_nn + D's first n; H_nn's pattern is fixed from the solve's first factorisation on.
+    const bool factored = llt_->Factorize(H_->H_nn(), D, pattern_analysed_);
+    pattern_analysed_ = true;
+    if (!factored)
       return false;
     // S = A_cc - H_cn A_nn^-1 H_nc = W^T W on the threads, W = R^-T H_nc by half solves (g_n's
     // with them): the two triangular solves of each border column were ~3/4 of the demo rig's step
@@ -609,6 +613,7 @@ void LevenbergMarquardt::Impl::Solve(ceres::Solver::Summary* summary) {
     if (llt_ != nullptr)
       llt_->ReleaseSolveWorkspace();
     llt_.reset();
+    pattern_analysed_ = false;
     S.termination_type = type;
     S.message = message;
     S.final_cost = x_cost + fixed_cost_;

@@ -78,7 +78,7 @@ struct SparseCholesky::Impl {
   void Analyze(const SparseColMajor& lower);
   void StoreUpper();
   bool SameAsAnalysed(const SparseColMajor& lower) const;
-  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
+  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
   bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
                  Eigen::Ref<Eigen::MatrixXd> X, Workspace::Impl* w) const;
@@ -103,8 +103,9 @@ struct SparseCholesky::Impl {
 SparseCholesky::SparseCholesky(Kind kind) : impl_(std::make_unique<Impl>(kind)) {}
 SparseCholesky::~SparseCholesky() = default;
 
-bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
-  return impl_->Factorize(lower, d);
+bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
+                               bool same_pattern) {
+  return impl_->Factorize(lower, d, same_pattern);
 }
 
 void SparseCholesky::ReleaseNumeric() {
@@ -315,8 +316,9 @@ bool SparseCholesky::Impl::SameAsAnalysed(const SparseColMajor& lower) const {
   return true;
 }
 
-bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
-  if (factor_ != nullptr && !SameAsAnalysed(lower))
+bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
+                                     bool same_pattern) {
+  if (factor_ != nullptr && !same_pattern && !SameAsAnalysed(lower))
     cholmod_free_factor(&factor_, &common_);
   if (factor_ == nullptr)
     Analyze(lower);

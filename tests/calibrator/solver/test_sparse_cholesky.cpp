@@ -66,14 +66,16 @@ TEST(SparseCholesky, SolvesAgreeWithDenseCholeskyAcrossRefactorisations) {
   std::normal_distribution<double> normal(0.0, 1.0);
   const int knots = 40;
   SparseCholesky chol;
-  for (int round = 0; round < 3; ++round) {
+  for (int round = 0; round < 5; ++round) {
     std::mt19937 pattern_rng(11);  // the same pattern every round, other values
     SparseColMajor A = BandWithBiases(knots, &pattern_rng, 1.0);
     for (int k = 0; k < A.nonZeros(); ++k)
       A.valuePtr()[k] *= 1.0 + 0.3 * round;
     // The damping vector is longer than A, as the solver's (the border's entries follow).
     Eigen::VectorXd d = Eigen::VectorXd::Constant(A.rows() + 5, 1e-3 * (round + 1));
-    ASSERT_TRUE(chol.Factorize(A, d)) << "round " << round;
+    // From the third round on the caller vouches for the pattern (the solver's steps): the
+    // check skipped, the values still scattered into the analysed pattern.
+    ASSERT_TRUE(chol.Factorize(A, d, round >= 2)) << "round " << round;
     const Eigen::MatrixXd dense = Dense(A, d);
     Eigen::MatrixXd B(A.rows(), 3);
     for (int i = 0; i < B.size(); ++i)
