@@ -88,6 +88,25 @@ TEST(SplineCalibrator, RecoversEveryParameterWithinFourSigma) {
     ASSERT_TRUE(res.rms_whitened.has_value()) << name;
     EXPECT_NEAR(*res.rms_whitened, 1.0, 0.1) << name;
   }
+  // The statistics' corner residuals (the pose evaluated once per frame, spline_problem_solve.h
+  // EvaluateCameraCorners) against the report data's (the trajectory evaluated for each corner and
+  // the camera's own projection, report_data_builder.cpp): the same inliers, the same RMS.
+  ASSERT_EQ(r.report_data.corners.size(), 2u);
+  for (const auto& [name, rows] : r.report_data.corners) {
+    double sum = 0.0;
+    std::int64_t inliers = 0;
+    for (const report::CornerResidual& row : rows) {
+      if (row.outlier || !std::isfinite(row.whitened))
+        continue;
+      sum += row.whitened * row.whitened;
+      ++inliers;
+    }
+    const SensorResiduals& res = r.result.residuals.at(name);
+    EXPECT_EQ(res.count, 2 * inliers) << name;
+    EXPECT_NEAR(*res.rms_whitened, std::sqrt(sum / static_cast<double>(2 * inliers)),
+                1e-9 * *res.rms_whitened)
+        << name;
+  }
   ASSERT_TRUE(r.result.solver.has_value());
   EXPECT_EQ(r.result.solver->method, "spline");
   EXPECT_GT(r.iterations, 0);

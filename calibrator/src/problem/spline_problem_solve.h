@@ -129,26 +129,25 @@ template <int N, Se3Representation Rep>
 void SplineProblem<N, Rep>::RemoveOutliers(double probability,
                                            std::vector<CameraOutliers>* report) {
   const double gate = -2.0 * std::log(1.0 - probability);  // chi-square, 2 dof
-  // One camera per thread, as the residual statistics (Finish): each writes its own slots.
-  std::vector<CameraOutliers> found(prep_.cameras.size());
-  ParallelFor(options_.threads, prep_.cameras.size(), [&](std::size_t c) {
-    PreparedCamera& cam = prep_.cameras[c];
-    CameraOutliers& o = found[c];
+  std::vector<Eigen::Vector2d> e;
+  std::vector<char> ok;
+  for (PreparedCamera& cam : prep_.cameras) {
+    CameraOutliers o;
     o.camera = cam.state->name();
     o.views = static_cast<int>(cam.views.size());
     o.invalid = cam.invalid;
+    EvaluateCameraCorners(cam, &e, &ok);
     for (std::size_t i = 0; i < cam.corners.size(); ++i) {
       if (cam.removed[i])
         continue;
       ++o.corners;
-      Eigen::Vector2d e;
-      if (!EvaluateCorner(cam, i, &e) || e.squaredNorm() > gate) {
+      if (!ok[i] || e[i].squaredNorm() > gate) {
         cam.removed[i] = true;
         ++o.removed;
       }
     }
-  });
-  report->insert(report->end(), found.begin(), found.end());
+    report->push_back(o);
+  }
 }
 
 template <int N, Se3Representation Rep>
@@ -181,22 +180,28 @@ std::string SplineProblem<N, Rep>::NextRebuild() {
 template <int N, Se3Representation Rep>
 void SplineProblem<N, Rep>::CollectResiduals(std::vector<CornerResiduals>* corners_out,
                                              std::vector<InertialResidualSums>* inertial_out) {
-  // Every corner on its own (the problem may hold them compressed), one camera per thread.
+  // Every corner on its own (the problem may hold them compressed), frames on the threads.
   std::vector<CornerResiduals>& corners = *corners_out;
   corners.assign(prep_.cameras.size(), CornerResiduals{});
-  ParallelFor(options_.threads, prep_.cameras.size(), [&](std::size_t k) {
+  std::vector<Eigen::Vector2d> e;
+  std::vector<char> ok;
+  for (std::size_t k = 0; k < prep_.cameras.size(); ++k) {
     const PreparedCamera& cam = prep_.cameras[k];
     CornerResiduals& c = corners[k];
     c.camera = cam.state->name();
+    EvaluateCameraCorners(cam, &e, &ok);
+    const auto left = static_cast<std::size_t>(std::count(ok.begin(), ok.end(), char{1}));
+    c.whitened.reserve(left);
+    c.sigma_px.reserve(left);
+    c.frame.reserve(left);
     for (std::size_t i = 0; i < cam.corners.size(); ++i) {
-      Eigen::Vector2d e;
-      if (cam.removed[i] || !EvaluateCorner(cam, i, &e))
+      if (!ok[i])
         continue;
-      c.whitened.push_back(e);
+      c.whitened.push_back(e[i]);
       c.sigma_px.push_back(cam.corners[i].sigma_px);
       c.frame.push_back(cam.corners[i].frame);
     }
-  });
+  }
   // Inertial samples one by one too (the problem may hold them compressed per run of segments).
   std::vector<InertialResidualSums>& inertial = *inertial_out;
   inertial.clear();
@@ -260,6 +265,61 @@ bool SplineProblem<N, Rep>::EvaluateCorner(const PreparedCamera& cam, std::size_
   p.params = s.camera->mutable_params();
   const std::vector<double*> blocks = CornerResidual<N, Rep>::Blocks(p);
   return cost->Evaluate(blocks.data(), e->data(), nullptr) && e->allFinite();
+}
+
+template <int N, Se3Representation Rep>
+void SplineProblem<N, Rep>::EvaluateCameraCorners(const PreparedCamera& cam,
+                                                  std::vector<Eigen::Vector2d>* e,
+                                                  std::vector<char>* ok) {
+  e->assign(cam.corners.size(), Eigen::Vector2d::Zero());
+  ok->assign(cam.corners.size(), 0);
+  std::vector<std::pair<std::size_t, std::size_t>> frames;
+  ForEachFrame(cam, [&](std::size_t first, std::size_t last) { frames.emplace_back(first, last); });
+  SensorState& s = *cam.state;
+  const auto one_by_one = [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i)
+      (*ok)[i] = !cam.removed[i] && EvaluateCorner(cam, i, &(*e)[i]);
+  };
+  // A line delay gives every corner its own time; an mrcal lens has no compile-time model.
+  if (s.line_delay != 0.0 || s.camera->mrcal_lens() != nullptr) {
+    ParallelFor(options_.threads, frames.size(),
+                [&](std::size_t f) { one_by_one(frames[f].first, frames[f].second); });
+    return;
+  }
+  VisitCameraModel(s.camera->type(), [&](auto model) {
+    using Model = decltype(model);
+    const Eigen::Matrix3d R_B_C =
+        Eigen::Map<const Eigen::Quaterniond>(s.q_B_S.data()).toRotationMatrix();
+    const Eigen::Map<const Eigen::Vector3d> t_B_C(s.t_B_S.data());
+    const double* params = s.camera->mutable_params();
+    ParallelFor(options_.threads, frames.size(), [&](std::size_t f) {
+      const auto [first, last] = frames[f];
+      // CornerResidual::Analytic's residual-only evaluation (corner_residual.h), its pose shared:
+      // the shift time_offset + v line_delay is time_offset for every corner here.
+      const std::int64_t stamp = cam.Stamp(first);
+      const double shift = s.time_offset + cam.corners[first].uv.y() * s.line_delay;
+      const int seg = SegmentOf(stamp, shift);
+      const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
+      const std::vector<double*> blocks = TrajBlocks(seg);
+      Se3Kinematics<double> kin;
+      Spline::template EvaluateSegment<double>(blocks.data(), clock.U(shift), clock.inv_dt, 0,
+                                               nullptr, &kin, nullptr);
+      for (std::size_t i = first; i < last; ++i) {
+        if (cam.removed[i])
+          continue;
+        const CornerMeasurement m = cam.Measurement(i);
+        const Eigen::Vector3d p_B = kin.R_W_B.transpose() * (m.p_W - kin.p_W_B);
+        const Eigen::Vector3d x = p_B - t_B_C;
+        const Eigen::Vector3d p_C = R_B_C.transpose() * x;
+        Eigen::Vector2d uv;
+        if (!Model::template Project<double>(params, p_C, &uv, nullptr, nullptr))
+          continue;
+        const double inv_sigma = 1.0 / m.sigma_px;
+        (*e)[i] = (m.uv - uv) * inv_sigma;
+        (*ok)[i] = (*e)[i].allFinite();
+      }
+    });
+  });
 }
 
 template <int N, Se3Representation Rep>

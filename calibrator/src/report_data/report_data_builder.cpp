@@ -40,13 +40,22 @@ std::vector<report::CornerResidual> Corners(const SensorState& s,
   rows.reserve(corners.size());
   int frame = -1;
   std::int64_t last_stamp = std::numeric_limits<std::int64_t>::min();
+  // The pose at the last corner's time, reused by the next corner at the same time (every corner
+  // of a frame without a line delay): the trajectory is a function of the time alone.
+  std::int64_t kin_t = 0;
+  bool have_kin = false;
+  Se3Kinematics<double> kin;
   for (const ReportCorner& c : corners) {
     if (c.t_ns != last_stamp) {
       ++frame;
       last_stamp = c.t_ns;
     }
-    const Se3Kinematics<double> kin =
-        trajectory(Shifted(c.t_ns, s.time_offset + c.uv.y() * s.line_delay), 0);
+    const std::int64_t t = Shifted(c.t_ns, s.time_offset + c.uv.y() * s.line_delay);
+    if (!have_kin || t != kin_t) {
+      kin = trajectory(t, 0);
+      kin_t = t;
+      have_kin = true;
+    }
     const Eigen::Vector3d p_C =
         R_B_C.transpose() * (kin.R_W_B.transpose() * (c.p_W - kin.p_W_B) - t_B_C);
     report::CornerResidual r;
