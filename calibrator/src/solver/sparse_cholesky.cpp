@@ -29,6 +29,19 @@ cholmod_sparse View(int n, const int* col_start, const int* row_index, const dou
   return s;
 }
 
+// A cholmod_dense header over n x k column-major doubles held elsewhere.
+cholmod_dense DenseView(double* x, std::size_t n, std::size_t k) {
+  cholmod_dense b{};
+  b.nrow = n;
+  b.ncol = k;
+  b.nzmax = n * k;
+  b.d = n;
+  b.x = x;
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
+  return b;
+}
+
 }  // namespace
 
 struct SparseCholesky::Workspace::Impl {
@@ -82,6 +95,8 @@ struct SparseCholesky::Impl {
   bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
   bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
                  Eigen::Ref<Eigen::MatrixXd> X, Workspace::Impl* w) const;
+  bool HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
+                     Workspace::Impl* w) const;
   // B's columns (then `last`'s) permuted into w->rhs and handed to CHOLMOD as `b`.
   cholmod_dense PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
                             Workspace::Impl* w) const;
@@ -144,6 +159,11 @@ bool SparseCholesky::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
                                const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
                                Workspace* workspace) const {
   return impl_->HalfSolve(B, last, X, workspace->impl_.get());
+}
+
+bool SparseCholesky::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
+                                   Workspace* workspace) const {
+  return impl_->HalfSolveBack(X, Y, workspace->impl_.get());
 }
 
 void SparseCholesky::ReleaseSolveWorkspace() {
@@ -370,15 +390,7 @@ cholmod_dense SparseCholesky::Impl::PermutedRhs(const Eigen::Ref<const Eigen::Ma
     for (std::size_t q = 0; q < n; ++q)
       w->rhs[c * n + q] = column[perm_[q]];
   }
-  cholmod_dense b{};
-  b.nrow = n;
-  b.ncol = k;
-  b.nzmax = n * k;
-  b.d = n;
-  b.x = w->rhs.data();
-  b.xtype = CHOLMOD_REAL;
-  b.dtype = CHOLMOD_DOUBLE;
-  return b;
+  return DenseView(w->rhs.data(), n, k);
 }
 
 bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
@@ -418,6 +430,30 @@ bool SparseCholesky::Impl::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
     }
   }
   return X.allFinite();
+}
+
+// R^-1 X = P^T L^-T D^-1/2 X: the rows scaled by D^-1/2 (LDL^T), CHOLMOD_Lt with L alone, and the
+// rows back to A's order.
+bool SparseCholesky::Impl::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                         Eigen::MatrixXd* Y, Workspace::Impl* w) const {
+  const std::size_t n = perm_.size();
+  const auto k = static_cast<std::size_t>(X.cols());
+  w->rhs.resize(n * k);
+  for (std::size_t c = 0; c < k; ++c) {
+    const double* column = X.data() + static_cast<Eigen::Index>(c) * X.outerStride();
+    for (std::size_t q = 0; q < n; ++q)
+      w->rhs[c * n + q] = half_scale_.empty() ? column[q] : column[q] * half_scale_[q];
+  }
+  cholmod_dense b = DenseView(w->rhs.data(), n, k);
+  if (!cholmod_solve2(CHOLMOD_Lt, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
+    return false;
+  const double* x = static_cast<const double*>(w->x->x);
+  Y->resize(X.rows(), X.cols());
+  for (Eigen::Index c = 0; c < X.cols(); ++c) {
+    for (std::size_t q = 0; q < n; ++q)
+      (*Y)(perm_[q], c) = x[static_cast<std::size_t>(c) * w->x->d + q];
+  }
+  return Y->allFinite();
 }
 
 }  // namespace ctcal

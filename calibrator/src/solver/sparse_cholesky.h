@@ -85,6 +85,11 @@ class SparseCholesky {
   bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
                  Eigen::Ref<Eigen::MatrixXd> X, Workspace* workspace) const;
 
+  // The other half: Y = R^-1 X (X in the factor's order, as HalfSolve's results; Y in A's), so
+  // that A^-1 b = R^-1 (R^-T b). False when Y is not finite.
+  bool HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
+                     Workspace* workspace) const;
+
   // Frees the solves' workspace (n x columns, ~3 copies of B) until the next Solve: it would
   // otherwise sit beside the next Jacobian pass, the solve's memory peak.
   void ReleaseSolveWorkspace();

@@ -142,7 +142,8 @@ TEST_P(SparseCholeskyOf, KindSolvesOnSeveralThreadsWithTheSameBits) {
 
 // The half solve X = R^-T B (A + diag(d) = R^T R) of the Schur complement: B^T A^-1 C = X^T Y
 // against the dense inverse, for the simplicial LDL^T (its D scaled in) and the supernodal LL^T
-// alike, with and without a last column appended, B with no column, several workspaces.
+// alike, with and without a last column appended, B with no column, several workspaces; and the
+// back half R^-1 that completes a solve.
 TEST_P(SparseCholeskyOf, KindHalfSolvesGiveTheInverseAsAProduct) {
   std::mt19937 rng(11);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -174,6 +175,11 @@ TEST_P(SparseCholeskyOf, KindHalfSolvesGiveTheInverseAsAProduct) {
   Eigen::MatrixXd full;
   ASSERT_TRUE(chol.Solve(C, &full));
   EXPECT_LE((X.transpose() * Y - B.transpose() * full).norm(), 1e-10 * expected.norm());
+  // And the other half: R^-1 (R^-T g) = A^-1 g, back in A's order.
+  Eigen::MatrixXd back;
+  ASSERT_TRUE(chol.HalfSolveBack(Z, &back, &second));
+  const Eigen::VectorXd expected_back = inverse * g;
+  EXPECT_LE((back.col(0) - expected_back).norm(), 1e-10 * expected_back.norm());
 }
 
 // The same band with its rows and columns symmetrically permuted at random: its natural order
