@@ -117,9 +117,9 @@ class TrajectoryFit {
       std::copy(spline->KnotData(0), spline->KnotData(0) + 7 * K_, saved.begin());
       const Eigen::Vector3d g_saved = g_;
       ApplyStep(dx);
-      // The candidate's cost with its H and b: the next step's when it is taken, as nearly every
-      // step is (a cost-only pass and then this one were ~1/3 of the fit more); a rejected
-      // candidate's are assembled again at the point kept.
+      // The candidate's cost with its H and b, the next step's when it is taken (nearly every step
+      // is): one pass per accepted step instead of a cost-only pass and then this one. A rejected
+      // candidate's H and b are assembled again at the point kept.
       const double new_cost = Assemble(true);
       if (!(new_cost < cost)) {  // rejected (also NaN): undo, damp more
         std::copy(saved.begin(), saved.end(), spline->KnotData(0));

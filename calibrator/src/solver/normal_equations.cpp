@@ -221,10 +221,6 @@ int SchurColumnsPerSolve(int threads, int c, int columns_in_flight) {
   return std::max(2, columns_in_flight / SchurThreads(threads, c));
 }
 
-std::size_t SchurHalfBytes(std::size_t n, std::size_t c) {
-  return n * (c + 1) * sizeof(double);
-}
-
 bool HalfSolveBorder(SparseCholesky* llt, const Eigen::MatrixXd& H_nc, int threads,
                      int columns_in_flight, const Eigen::VectorXd* g_n, Eigen::MatrixXd* W) {
   const auto n = static_cast<int>(H_nc.rows()), c = static_cast<int>(H_nc.cols());

@@ -105,13 +105,11 @@ class NormalEquations {
 // How SubtractBorderSchur applies A_nn^-1 to the border columns.
 //   kHalf:   W = R^-T [H_nc | g_n] by half solves (A_nn = R^T R, SparseCholesky::HalfSolve), held
 //            whole, and S -= W_c^T W_c by matrix products: one triangular solve per column
-//            instead of two, for n x (c + 1) more memory (SchurHalfBytes).
+//            instead of two, for W's n x (c + 1) doubles (the border's rows of the whole H's
+//            Cholesky factor). The own solver's steps and covariance.
 //   kChunks: A_nn^-1 [H_nc | g_n] by full solves a few columns at a time, each chunk subtracted
-//            before the next: no n x c buffer.
+//            before the next: no n x c buffer. Ceres' covariance (marginal_covariance.cpp).
 enum class SchurSolves { kHalf, kChunks };
-
-// What kHalf holds beyond kChunks' buffers: W, n x (c + 1) doubles.
-std::size_t SchurHalfBytes(std::size_t n, std::size_t c);
 
 // The border's information with the nuisance states marginalised, H_cc - H_cn H_nn^-1 H_nc (H_nn
 // factored by CHOLMOD, SparseCholesky). A nuisance state no residual touches (zero diagonal) is
