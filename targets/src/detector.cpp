@@ -110,8 +110,17 @@ double EstimateNoiseSigma(const cv::Mat& gray) {
 // libapriltag detectors: not thread-safe, so a small pool hands one to each concurrent call.
 
 struct Detector::Pool {
+  // The contexts' shared family and the detector that owns its quick-decode table (TagContext):
+  // built by the first context, freed after every context.
+  internal::TagFamilyPtr family;
+  apriltag_detector_t* owner = nullptr;
   std::mutex mutex;
   std::vector<std::unique_ptr<TagContext>> free;
+  ~Pool() {
+    free.clear();
+    if (owner != nullptr)
+      apriltag_detector_destroy(owner);  // frees the family's decode table
+  }
 };
 
 Detector::Detector(const Board& board, const DetectorOptions& options)
@@ -120,6 +129,9 @@ Detector::Detector(const Board& board, const DetectorOptions& options)
 Detector::~Detector() = default;
 
 std::unique_ptr<Detector::TagContext> Detector::AcquireTagContext() const {
+  float decimate = options_.quad_decimate;
+  if (decimate <= 0.0f)
+    decimate = board_.config().black_tag_border >= 2 ? 2.0f : 1.0f;
   {
     std::lock_guard<std::mutex> lock(pool_->mutex);
     if (!pool_->free.empty()) {
@@ -127,13 +139,17 @@ std::unique_ptr<Detector::TagContext> Detector::AcquireTagContext() const {
       pool_->free.pop_back();
       return context;
     }
+    if (pool_->family == nullptr) {
+      // The decode table, once (under the lock: a second caller waits for it instead of
+      // building its own).
+      internal::TagFamilyPtr family = internal::CreateTag36h11(board_.config().black_tag_border);
+      pool_->owner = NewApriltagDetector(family.get(), decimate);
+      pool_->family = std::move(family);
+    }
   }
   auto context = std::make_unique<TagContext>();
-  context->family = internal::CreateTag36h11(board_.config().black_tag_border);
-  float decimate = options_.quad_decimate;
-  if (decimate <= 0.0f)
-    decimate = board_.config().black_tag_border >= 2 ? 2.0f : 1.0f;
-  context->detector = NewApriltagDetector(context->family.get(), decimate);
+  // The family's table exists: adding the family to another detector only lists it.
+  context->detector = NewApriltagDetector(pool_->family.get(), decimate);
   return context;
 }
 
