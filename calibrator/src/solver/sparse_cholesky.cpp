@@ -97,6 +97,9 @@ struct SparseCholesky::Impl {
                  Eigen::Ref<Eigen::MatrixXd> X, Workspace::Impl* w) const;
   bool HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
                      Workspace::Impl* w) const;
+  // CHOLMOD's result in w.x (the factor's order, `cols` columns) back in A's order, in *X; false
+  // when it is not finite.
+  bool Unpermuted(const Workspace::Impl& w, Eigen::Index cols, Eigen::MatrixXd* X) const;
   // B's columns (then `last`'s) permuted into w->rhs and handed to CHOLMOD as `b`.
   cholmod_dense PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
                             Workspace::Impl* w) const;
@@ -399,11 +402,16 @@ bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
   // The factor is only read (CHOLMOD_A on a supernodal LL^T): several workspaces may solve at once.
   if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
     return false;
-  const double* x = static_cast<const double*>(w->x->x);
-  X->resize(B.rows(), B.cols());
-  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+  return Unpermuted(*w, B.cols(), X);
+}
+
+bool SparseCholesky::Impl::Unpermuted(const Workspace::Impl& w, Eigen::Index cols,
+                                      Eigen::MatrixXd* X) const {
+  const double* x = static_cast<const double*>(w.x->x);
+  X->resize(static_cast<Eigen::Index>(perm_.size()), cols);
+  for (Eigen::Index c = 0; c < cols; ++c) {
     for (std::size_t q = 0; q < perm_.size(); ++q)
-      (*X)(perm_[q], c) = x[static_cast<std::size_t>(c) * w->x->d + q];
+      (*X)(perm_[q], c) = x[static_cast<std::size_t>(c) * w.x->d + q];
   }
   return X->allFinite();
 }
@@ -447,13 +455,7 @@ bool SparseCholesky::Impl::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>
   cholmod_dense b = DenseView(w->rhs.data(), n, k);
   if (!cholmod_solve2(CHOLMOD_Lt, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
     return false;
-  const double* x = static_cast<const double*>(w->x->x);
-  Y->resize(X.rows(), X.cols());
-  for (Eigen::Index c = 0; c < X.cols(); ++c) {
-    for (std::size_t q = 0; q < n; ++q)
-      (*Y)(perm_[q], c) = x[static_cast<std::size_t>(c) * w->x->d + q];
-  }
-  return Y->allFinite();
+  return Unpermuted(*w, X.cols(), Y);
 }
 
 }  // namespace ctcal
