@@ -88,9 +88,10 @@ namespace ctcal {
 
 // A libapriltag detector, held by Detector's pool (libapriltag is not thread-safe, so each
 // concurrent call gets its own). Its family is the pool's, shared by every context: the family's
-// quick-decode table (2 corrected bits: 18.8 MB, 80-270 ms to build, Detector.cpp Pool) is built
-// once and only read while decoding. libapriltag frees a family's table when any detector holding
-// it is destroyed, so a context lets go of the family first; the pool's owner frees it last.
+// quick-decode table (2 corrected bits: 18.8 MB, 80-270 ms to build; detector.cpp, Detector::Pool)
+// is built once and only read while decoding. libapriltag frees a family's table when any detector
+// holding it is destroyed, so a context lets go of the family first; the pool's owner frees it
+// last.
 struct Detector::TagContext {
   apriltag_detector_t* detector = nullptr;
   ~TagContext() {
