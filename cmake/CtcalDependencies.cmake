@@ -26,6 +26,9 @@ find_package(Boost REQUIRED COMPONENTS program_options filesystem)
 find_package(yaml-cpp REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(CAIRO REQUIRED IMPORTED_TARGET cairo)
+# libdeflate (Debian libdeflate-dev): the direct PNG decoder's inflate (targets/), the report data's
+# gzip and the figures' PNGs (report/).
+pkg_check_modules(DEFLATE REQUIRED IMPORTED_TARGET libdeflate)
 find_package(Threads REQUIRED)
 
 # mrcal ships neither a CMake config nor a .pc file.

@@ -16,6 +16,11 @@
 #include <memory>
 #include <stdexcept>
 #include <system_error>
+#include <vector>
+
+#include <sys/stat.h>
+
+#include "png_direct.h"
 
 // libpng and libjpeg report errors by longjmp. A longjmp skips the destructors of everything it
 // unwinds, so the rule throughout: a function that calls setjmp holds no object with a destructor
@@ -42,9 +47,10 @@ constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
 constexpr std::size_t kMessageSize = 256;
 static_assert(kMessageSize >= JMSG_LENGTH_MAX, "libjpeg's messages must fit");
 
-// Where the encoded bytes come from: memory, or a file read as decoding goes. Not a copy of the
-// whole file: a fresh buffer of a file's size cost ~150 page faults per 752x480 image, 2-3 ms on
-// the development machine, as much as the decoding itself.
+// Where the encoded bytes come from: memory, or a file read as decoding goes. A PNG file is read
+// whole into its thread's buffer for the direct decoder (png_direct.h); a fresh buffer of a
+// file's size per image cost ~150 page faults per 752x480 image, 2-3 ms on the development
+// machine, as much as the decoding itself, so the buffer is kept between images.
 struct Source {
   const std::uint8_t* data = nullptr;
   std::size_t size = 0;
@@ -410,8 +416,12 @@ cv::Mat Decode(Source* source, const std::uint8_t* head, std::size_t n, std::str
     *why = OtherFormat(head, n);
     return {};
   }
+  cv::Mat image;
+  if (png && source->file == nullptr &&
+      internal::DecodePngDirect(source->data, source->size, kMaxSide, kMaxBytes, &image))
+    return image;
   Failure failure;
-  cv::Mat image = png ? DecodePng(source, &failure) : DecodeJpeg(source, &failure);
+  image = png ? DecodePng(source, &failure) : DecodeJpeg(source, &failure);
   if (image.empty()) {
     if (failure.unsupported)
       *why = failure.message;
@@ -457,6 +467,17 @@ bool PngWriteImage(png_structp png, png_infop info, const cv::Mat& image) {
   return true;
 }
 
+// The whole of a regular file of at most `limit` bytes into `bytes` (its thread's buffer, kept),
+// from the file's start; false (the file's position unknown) where it is not one or a read fails.
+bool ReadWhole(std::FILE* file, std::size_t limit, std::vector<std::uint8_t>* bytes) {
+  struct stat st {};
+  if (fstat(fileno(file), &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 ||
+      static_cast<std::uint64_t>(st.st_size) > limit || std::fseek(file, 0, SEEK_SET) != 0)
+    return false;
+  bytes->resize(static_cast<std::size_t>(st.st_size));
+  return std::fread(bytes->data(), 1, bytes->size(), file) == bytes->size();
+}
+
 }  // namespace
 
 cv::Mat ReadImageFile(const std::string& path) {
@@ -474,8 +495,20 @@ cv::Mat ReadImageFile(const std::string& path) {
     throw fail(ErrnoText(errno));
   Source source;
   source.file = file.get();
+  // A PNG of a regular file from memory (its direct decoder's way); a file that grew or shrank
+  // meanwhile, or any other, read as decoding goes.
+  thread_local std::vector<std::uint8_t> bytes;
+  if (IsPng(head, n) && ReadWhole(file.get(), kMaxBytes, &bytes)) {
+    source.file = nullptr;
+    source.data = bytes.data();
+    source.size = bytes.size();
+  } else if (std::fseek(file.get(), 0, SEEK_SET) != 0) {
+    throw fail(ErrnoText(errno));
+  }
   std::string why;
   cv::Mat image = Decode(&source, head, n, &why);
+  if (bytes.capacity() > (std::size_t(16) << 20))
+    std::vector<std::uint8_t>().swap(bytes);
   if (image.empty())
     throw fail(why);
   return image;

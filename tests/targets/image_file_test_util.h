@@ -13,7 +13,9 @@
 
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <random>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +30,8 @@ struct PngSpec {
   std::vector<png_color> palette;
   std::vector<png_byte> trans;  // palette alpha
   bool trans_color = false;     // grey / RGB tRNS: the colour of the first pixel
+  int filters = 0;              // png_set_filter's mask (0: libpng's default)
+  std::size_t idat_bytes = 0;   // the largest IDAT chunk (0: libpng's default, 8 KiB)
   std::vector<std::vector<std::uint8_t>> rows;
 };
 
@@ -42,6 +46,10 @@ inline std::vector<std::uint8_t> EncodePng(const PngSpec& s) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png_create_info_struct(png);
   png_set_write_fn(png, &out, AppendBytes, nullptr);
+  if (s.filters != 0)
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, s.filters);
+  if (s.idat_bytes != 0)
+    png_set_compression_buffer_size(png, s.idat_bytes);
   png_set_IHDR(png, info, s.width, s.height, s.bit_depth, s.color_type,
                s.interlaced ? PNG_INTERLACE_ADAM7 : PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
@@ -144,6 +152,31 @@ inline std::vector<std::pair<std::string, PngSpec>> PngCases() {
   interlaced_palette.interlaced = true;
   cases.emplace_back("interlaced palette 2-bit", interlaced_palette);
   return cases;
+}
+
+// The row filter types of a non-interlaced PNG (its IDAT chunks inflated) and how many IDATs
+// it has.
+inline std::pair<std::set<int>, int> FiltersAndIdats(const std::vector<std::uint8_t>& png,
+                                                     std::size_t row_bytes, int height) {
+  std::vector<std::uint8_t> stream;
+  int idats = 0;
+  for (std::size_t at = 8; at + 12 <= png.size();) {
+    const std::size_t length = std::size_t(png[at]) << 24 | std::size_t(png[at + 1]) << 16 |
+                               std::size_t(png[at + 2]) << 8 | png[at + 3];
+    if (std::memcmp(png.data() + at + 4, "IDAT", 4) == 0) {
+      stream.insert(stream.end(), png.begin() + at + 8, png.begin() + at + 8 + length);
+      ++idats;
+    }
+    at += length + 12;
+  }
+  std::vector<std::uint8_t> rows((row_bytes + 1) * height);
+  uLongf size = rows.size();
+  std::set<int> types;
+  if (uncompress(rows.data(), &size, stream.data(), stream.size()) == Z_OK) {
+    for (int y = 0; y < height; ++y)
+      types.insert(rows[y * (row_bytes + 1)]);
+  }
+  return {types, idats};
 }
 
 // The PNG chunk `type` + `data` with its length and CRC.

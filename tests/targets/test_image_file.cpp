@@ -24,6 +24,7 @@
 
 #include "ctcal/targets/image_file.h"
 #include "image_file_test_util.h"
+#include "png_direct.h"
 
 namespace ctcal {
 namespace {
@@ -32,6 +33,7 @@ namespace fs = std::filesystem;
 using image_test::AppendChunk;
 using image_test::EncodeJpeg;
 using image_test::EncodePng;
+using image_test::FiltersAndIdats;
 using image_test::PngCases;
 using image_test::PngSpec;
 using image_test::SofSizeOffset;
@@ -180,6 +182,67 @@ TEST_F(ImageFile, EveryPngKindDecodesAsCvImdecode) {
     WriteBytes(Path("kind.png"), bytes);
     EXPECT_TRUE(Identical(ReadImageFile(Path("kind.png")), ours)) << name;
   }
+}
+
+// The direct decoder (png_direct.h) takes the common kinds -- grey and RGB of 8 and 16 bits, each
+// row filter, the data over many IDAT chunks -- and gives cv::imdecode's pixels; every other kind,
+// and data it finds wrong, it leaves to libpng.
+TEST_F(ImageFile, DirectPngDecoderTakesTheCommonKindsExactly) {
+  const auto direct = [](const std::vector<std::uint8_t>& bytes, cv::Mat* image) {
+    return internal::DecodePngDirect(bytes.data(), bytes.size(), 65536, std::uint64_t(1) << 30,
+                                     image);
+  };
+  std::uint32_t seed = 100;
+  for (const int colour : {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_RGB}) {
+    for (const int depth : {8, 16}) {
+      const int samples = colour == PNG_COLOR_TYPE_RGB ? 3 : 1;
+      for (const int filter : {PNG_FILTER_NONE, PNG_FILTER_SUB, PNG_FILTER_UP, PNG_FILTER_AVG,
+                               PNG_FILTER_PAETH, PNG_ALL_FILTERS}) {
+        PngSpec s = image_test::Spec(colour, depth, samples, seed++);
+        // A ramp under the noise, so that the predictors' sums wrap around and differ.
+        for (std::size_t y = 0; y < s.rows.size(); ++y) {
+          for (std::size_t i = 0; i < s.rows[y].size(); ++i)
+            s.rows[y][i] = static_cast<std::uint8_t>(7 * i + 13 * y + (s.rows[y][i] & 15));
+        }
+        s.filters = filter;
+        s.idat_bytes = 64;
+        const std::vector<std::uint8_t> bytes = EncodePng(s);
+        const auto [types, idats] = FiltersAndIdats(bytes, s.rows[0].size(), s.height);
+        EXPECT_GT(idats, 3);
+        if (filter != PNG_ALL_FILTERS) {  // the first row may be filtered otherwise
+          const int type = filter == PNG_FILTER_NONE  ? 0
+                           : filter == PNG_FILTER_SUB ? 1
+                           : filter == PNG_FILTER_UP  ? 2
+                           : filter == PNG_FILTER_AVG ? 3
+                                                      : 4;
+          EXPECT_EQ(types.count(type), 1u) << filter;
+        }
+        cv::Mat image;
+        ASSERT_TRUE(direct(bytes, &image)) << colour << " " << depth << " " << filter;
+        EXPECT_TRUE(Identical(image, cv::imdecode(bytes, cv::IMREAD_UNCHANGED)))
+            << colour << " " << depth << " " << filter;
+      }
+    }
+  }
+  for (const auto& [name, spec] : PngCases()) {
+    const bool common =
+        (spec.color_type == PNG_COLOR_TYPE_GRAY || spec.color_type == PNG_COLOR_TYPE_RGB) &&
+        spec.bit_depth >= 8 && !spec.interlaced && !spec.trans_color;
+    cv::Mat image;
+    EXPECT_EQ(direct(EncodePng(spec), &image), common) << name;
+  }
+  // Wrong data: a flipped bit in the image data, a cut before IEND, a CRC.
+  std::vector<std::uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", RandomImage(24, 31, CV_8UC1, 15), png));
+  cv::Mat image;
+  ASSERT_TRUE(direct(png, &image));
+  std::vector<std::uint8_t> bad = png;
+  bad[bad.size() - 20] ^= 0x40;
+  EXPECT_FALSE(direct(bad, &image));
+  EXPECT_FALSE(direct(std::vector<std::uint8_t>(png.begin(), png.end() - 12), &image));
+  bad = png;
+  bad[19] = 0;
+  EXPECT_FALSE(direct(bad, &image));
 }
 
 // What the expansions give, stated without OpenCV: its conversions are the documented ones.
