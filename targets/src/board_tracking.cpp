@@ -119,14 +119,15 @@ DetectionResult BoardTracker::Next(const cv::Mat& image) {
   }
   // Tracking finds a tag coming into view only next to tracked ones (the completion); the full
   // detector looks everywhere, every so many frames while a tag the board puts inside the image
-  // is still missing.
+  // is still missing (its decimated passes: a tag that only the full resolution finds is one the
+  // tracked frame's completion reaches from its neighbours).
   const bool redetect =
       tracked && since_full_ + 1 >= options.track_redetect_frames &&
       result.tags_accepted < detector_.board().NumTags() &&
       MissingTagInView(detector_.board(), TagsOfCorners(detector_.board(), result.corners),
                        gray.size(), -options.min_border_distance_px);
   if (!tracked || redetect) {
-    DetectionResult full = detector_.DetectAprilGrid(gray, noise_sigma);
+    DetectionResult full = detector_.DetectAprilGrid(gray, noise_sigma, tracked);
     ++stats_.full_detections;
     since_full_ = 0;
     if (!tracked || full.tags_accepted >= result.tags_accepted)

@@ -229,7 +229,8 @@ void FinishTagView(const DetectorOptions& options, DetectionResult* result) {
 
 using namespace internal;  // NOLINT(build/namespaces): detector_internal.h's passes
 
-DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const {
+DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigma,
+                                          bool decimated_only) const {
   // Kalibr's rejection rules and the sub-pixel refinement, applied to one pass's tags.
   const auto accept = [&](const std::vector<TagDetection>& tags, const std::set<int>& bad_border) {
     DetectionResult result;
@@ -276,7 +277,10 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
   // Cheapest first, each further step only while a tag of the board whose corners are predicted
   // inside the image is still missing: one decimated libapriltag pass and grid completion (all
   // that a clear view needs); then the painted and thinned passes (docs/targets.md); then the
-  // same at full resolution, which finds small or sharply printed tags that decimation loses.
+  // same at full resolution, which finds small or sharply printed tags that decimation loses --
+  // except where the caller has a view already (`decimated_only`: the tracker's periodic look for
+  // tags coming into view, whose full-resolution pass was 1/10 of a tracked video's CPU time and
+  // added no corner to the Kalibr-style recording's 33628).
   const auto tag_missing = [&](const DetectionResult& r) {
     return r.tags_accepted < board_.NumTags() &&
            MissingTagInView(board_, TagsOfCorners(board_, r.corners), gray.size(),
@@ -313,7 +317,7 @@ DetectionResult Detector::DetectAprilGrid(const cv::Mat& gray, double noise_sigm
   if (tag_missing(result))
     keep_better(
         accept(DetectGridTags(context->detector, gray, board_, &bad_border, &first), bad_border));
-  if (context->detector->quad_decimate > 1.0f && tag_missing(result)) {
+  if (!decimated_only && context->detector->quad_decimate > 1.0f && tag_missing(result)) {
     const float decimated = context->detector->quad_decimate;
     context->detector->quad_decimate = 1.0f;
     std::set<int> bad_border_full;

@@ -29,7 +29,7 @@ struct TrackingStats {
 // before's tags, it tries once more from the frame before's corners moved by the image's shift
 // (phase correlation). The full detector runs on the first frame, after a frame without the
 // board, when that fails too, and every track_redetect_frames frames while a tag the board puts
-// inside the image is missing.
+// inside the image is missing (there without its full-resolution pass: the frame is tracked).
 // Checkerboards and ChArUco boards, DetectorOptions::track off and DetectorOptions::refine off
 // run the full detector on every frame. Not thread-safe; one tracker per sequence (the Detector may
 // be shared).

@@ -169,7 +169,10 @@ class Detector {
                    DetectionResult* result) const;
   // A found board's last steps: the final refinement (and rectified one), the model error.
   void FinishView(const cv::Mat& gray, double noise_sigma, DetectionResult* result) const;
-  DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma) const;
+  // `decimated_only`: without the last pass at full resolution (BoardTracker's re-detection in a
+  // tracked frame, detector_aprilgrid.cpp).
+  DetectionResult DetectAprilGrid(const cv::Mat& gray, double noise_sigma,
+                                  bool decimated_only = false) const;
   DetectionResult DetectCheckerboard(const cv::Mat& gray, double noise_sigma) const;
   DetectionResult DetectCharuco(const cv::Mat& gray, double noise_sigma) const;
   // Every corner refined again in a patch rectified by its neighbourhood's quadratic board map
