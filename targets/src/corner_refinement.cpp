@@ -90,11 +90,18 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
   std::vector<uint8_t> in_image(static_cast<size_t>(n * n));
   // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates); with a warp,
   // `at` and the patch are in rectified coordinates, each pixel read bilinearly at its image point.
+  // all_in: every sample of the patch lies in the image (most corners; no flag to look at).
+  bool all_in = false;
   const auto sample_patch = [&](const Eigen::Vector2d& at) {
+    all_in = false;
     if (warp == nullptr) {
       cv::getRectSubPix(gray, cv::Size(n, n),
                         cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
                         CV_32F);
+      if (inside(at, h + 1.0)) {
+        all_in = true;
+        return;
+      }
       for (int r = 0; r < n; ++r) {
         for (int c = 0; c < n; ++c)
           in_image[static_cast<size_t>(r * n + c)] =
@@ -139,8 +146,8 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       const uint8_t* mirror_down = mirror_row + n;
       for (int dx = -h; dx <= h; ++dx) {
         const int c = dx + h + 1, m = h - dx + 1;
-        if (!(in_row[c - 1] && in_row[c + 1] && in_up[c] && in_down[c] && mirror_row[m - 1] &&
-              mirror_row[m + 1] && mirror_up[m] && mirror_down[m]))
+        if (!all_in && !(in_row[c - 1] && in_row[c + 1] && in_up[c] && in_down[c] &&
+                         mirror_row[m - 1] && mirror_row[m + 1] && mirror_up[m] && mirror_down[m]))
           continue;
         const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
         const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
