@@ -20,7 +20,8 @@ PACKAGES=(
   librosbag-storage-dev libsqlite3-dev python3-rosbag
 )
 # Why the less obvious ones: make runs the README's two commands (a fresh Debian 12 has none);
-# libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt);
+# libdeflate-dev compresses the report data and the figures' PNGs (report/CMakeLists.txt) and
+# inflates the common PNGs the detector reads (targets/src/png_direct.cpp);
 # libpng-dev and libjpeg62-turbo-dev read the datasets' PNG / JPEG images and write the
 # simulator's PNGs (targets/src/image_file.cpp: OpenCV's imgcodecs is not linked into ctcal);
 # fonts-dejavu-core holds the report's "DejaVu Sans" / "DejaVu Sans Mono" (report/src/plot_draw.h);
