@@ -290,12 +290,13 @@ void SplineProblem<N, Rep>::EvaluateCameraCorners(const PreparedCamera& cam,
     using Model = decltype(model);
     const Eigen::Matrix3d R_B_C =
         Eigen::Map<const Eigen::Quaterniond>(s.q_B_S.data()).toRotationMatrix();
-    const Eigen::Map<const Eigen::Vector3d> t_B_C(s.t_B_S.data());
+    const Eigen::Vector3d t_B_C = Eigen::Map<const Eigen::Vector3d>(s.t_B_S.data());
     const double* params = s.camera->mutable_params();
     ParallelFor(options_.threads, frames.size(), [&](std::size_t f) {
       const auto [first, last] = frames[f];
-      // CornerResidual::Analytic's residual-only evaluation (corner_residual.h), its pose shared:
-      // the shift time_offset + v line_delay is time_offset for every corner here.
+      // CornerResidual::Analytic's residual-only evaluation (WhitenedCornerResidual,
+      // corner_residual.h), its pose shared: the shift time_offset + v line_delay is time_offset
+      // for every corner here.
       const std::int64_t stamp = cam.Stamp(first);
       const double shift = s.time_offset + cam.corners[first].uv.y() * s.line_delay;
       const int seg = SegmentOf(stamp, shift);
@@ -307,15 +308,10 @@ void SplineProblem<N, Rep>::EvaluateCameraCorners(const PreparedCamera& cam,
       for (std::size_t i = first; i < last; ++i) {
         if (cam.removed[i])
           continue;
-        const CornerMeasurement m = cam.Measurement(i);
-        const Eigen::Vector3d p_B = kin.R_W_B.transpose() * (m.p_W - kin.p_W_B);
-        const Eigen::Vector3d x = p_B - t_B_C;
-        const Eigen::Vector3d p_C = R_B_C.transpose() * x;
-        Eigen::Vector2d uv;
-        if (!Model::template Project<double>(params, p_C, &uv, nullptr, nullptr))
+        CornerPoints points;
+        if (!WhitenedCornerResidual<Model>(cam.Measurement(i), kin.R_W_B, kin.p_W_B, R_B_C, t_B_C,
+                                           params, &points, &(*e)[i]))
           continue;
-        const double inv_sigma = 1.0 / m.sigma_px;
-        (*e)[i] = (m.uv - uv) * inv_sigma;
         (*ok)[i] = (*e)[i].allFinite();
       }
     });

@@ -66,6 +66,31 @@ inline CornerMeasurement MeasurementOf(const HeldCorner& c, const Eigen::Vector3
   return m;
 }
 
+// The model's arithmetic from the base's pose on (file comment): p_B, x = p_B - t_B_C and p_C of
+// the corner, and its whitened residual r = (uv_meas - project(params, p_C)) / sigma, with the
+// projection's Jacobians where asked for. False where the projection is invalid. Shared by
+// CornerResidual::Analytic and the per-frame evaluation of a camera's corners
+// (SplineProblem::EvaluateCameraCorners), which evaluates the pose once per frame: one arithmetic,
+// the same bits.
+struct CornerPoints {
+  Eigen::Vector3d p_B, x, p_C;
+};
+template <class Model>
+inline bool WhitenedCornerResidual(
+    const CornerMeasurement& m, const Eigen::Matrix3d& R_W_B, const Eigen::Vector3d& p_W_B,
+    const Eigen::Matrix3d& R_B_C, const Eigen::Vector3d& t_B_C, const double* params,
+    CornerPoints* points, Eigen::Vector2d* r, Eigen::Matrix<double, 2, 3>* J_uv_p = nullptr,
+    Eigen::Matrix<double, 2, Model::kNumParams>* J_uv_params = nullptr) {
+  points->p_B = R_W_B.transpose() * (m.p_W - p_W_B);
+  points->x = points->p_B - t_B_C;
+  points->p_C = R_B_C.transpose() * points->x;
+  Eigen::Vector2d uv;
+  if (!Model::template Project<double>(params, points->p_C, &uv, J_uv_p, J_uv_params))
+    return false;
+  *r = (m.uv - uv) * (1.0 / m.sigma_px);
+  return true;
+}
+
 template <int N, Se3Representation Rep>
 class CornerResidual {
  public:
@@ -164,24 +189,23 @@ class CornerResidual {
 
       const Eigen::Matrix3d R_B_C =
           Eigen::Map<const Eigen::Quaterniond>(p[kQ_B_C]).toRotationMatrix();
-      const Eigen::Map<const Eigen::Vector3d> t_B_C(p[kT_B_C]);
-      const Eigen::Vector3d p_B = kin.R_W_B.transpose() * (m_.p_W - kin.p_W_B);
-      const Eigen::Vector3d x = p_B - t_B_C;
-      const Eigen::Vector3d p_C = R_B_C.transpose() * x;
-
-      Eigen::Vector2d uv;
+      const Eigen::Vector3d t_B_C = Eigen::Map<const Eigen::Vector3d>(p[kT_B_C]);
+      CornerPoints points;
+      Eigen::Vector2d r;
       Eigen::Matrix<double, 2, 3> J_uv_p;
       Eigen::Matrix<double, 2, Model::kNumParams> J_uv_params;
       const bool want_params = Wanted(jacobians, kParams);
-      if (!Model::template Project<double>(p[kParams], p_C, &uv,
-                                           jacobians != nullptr ? &J_uv_p : nullptr,
-                                           want_params ? &J_uv_params : nullptr))
+      if (!WhitenedCornerResidual<Model>(m_, kin.R_W_B, kin.p_W_B, R_B_C, t_B_C, p[kParams],
+                                         &points, &r, jacobians != nullptr ? &J_uv_p : nullptr,
+                                         want_params ? &J_uv_params : nullptr))
         return false;
-      const double inv_sigma = 1.0 / m_.sigma_px;
-      Eigen::Map<Eigen::Vector2d> r(residuals);
-      r = (m_.uv - uv) * inv_sigma;
+      residuals[0] = r[0];
+      residuals[1] = r[1];
       if (jacobians == nullptr)
         return true;
+      const Eigen::Vector3d& p_B = points.p_B;
+      const Eigen::Vector3d& x = points.x;
+      const double inv_sigma = 1.0 / m_.sigma_px;
 
       const Eigen::Matrix<double, 2, 3> J_r_pC = -inv_sigma * J_uv_p;
       const Eigen::Matrix<double, 2, 3> J_r_pB = J_r_pC * R_B_C.transpose();

@@ -101,14 +101,11 @@ bool CompressFrameCornersOf(
       return false;
     const Eigen::Vector2d e = (m.uv - uv) / m.sigma_px;
     double w = 1.0 / m.sigma_px;
-    if (huber > 0.0) {
+    if (huber > 0.0) {  // within the threshold rho(s) = s, rho' = 1: both lines change nothing
       const double s = e.squaredNorm();
-      if (s > huber * huber) {
-        const double root = std::sqrt(s);
-        const double rho1 = huber / root;  // rho'(s)
-        remainder += (2.0 * huber * root - huber * huber) - rho1 * s;
-        w *= std::sqrt(rho1);
-      }
+      const HuberValue h = Huber(s, huber);
+      remainder += h.rho - h.rho1 * s;
+      w *= std::sqrt(h.rho1);
     }
     auto rows = A.template middleRows<2>(2 * i);
     rows.template leftCols<3>() = w * (J_uv_p * Hat<double>(p_C));
@@ -138,8 +135,7 @@ bool FrameCornersCostOf(int M, const CornerAt& corner_at, const double* params,
     Eigen::Vector2d uv;
     if (!Model::template Project<double>(params, R_C_W * m.p_W + t_C_W, &uv))
       return false;
-    const double s = ((m.uv - uv) / m.sigma_px).squaredNorm();
-    sum += huber > 0.0 && s > huber * huber ? 2.0 * huber * std::sqrt(s) - huber * huber : s;
+    sum += Huber(((m.uv - uv) / m.sigma_px).squaredNorm(), huber).rho;
   }
   *cost = sum;
   return true;

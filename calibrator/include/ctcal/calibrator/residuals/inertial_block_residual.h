@@ -328,14 +328,9 @@ class InertialBlockResidual final : public ceres::CostFunction {
         return false;
       const Eigen::Map<const Eigen::Matrix<double, kSampleRows, 1>> ri(r);
       const double sq = ri.squaredNorm();
-      double w = 1.0;
-      if (huber_ > 0.0 && sq > huber_ * huber_) {
-        const double root = std::sqrt(sq);
-        w = std::sqrt(huber_ / root);  // sqrt(rho'(s))
-        cost += 2.0 * huber_ * root - huber_ * huber_;
-      } else {
-        cost += sq;
-      }
+      const HuberValue h = Huber(sq, huber_);
+      const double w = std::sqrt(h.rho1);
+      cost += h.rho;
       weighted += w * w * sq;
       if (!want)
         continue;

@@ -23,6 +23,7 @@
 #include <ceres/manifold.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -132,6 +133,21 @@ inline void CheckCount(const char* residual, const char* what, std::size_t got, 
 }
 
 }  // namespace residual_internal
+
+// Huber's loss on a squared whitened norm s with threshold a (a <= 0: plain L2), as the compressed
+// blocks apply it (frame_corners_residual.h, inertial_block_residual.h): rho(s) = s for s <= a^2,
+// else 2 a sqrt(s) - a^2, whose derivative rho'(s) is 1, else a / sqrt(s) (Ceres' HuberLoss, which
+// halves the cost, holds rho(s) / 2).
+struct HuberValue {
+  double rho = 0.0;   // rho(s)
+  double rho1 = 1.0;  // rho'(s)
+};
+inline HuberValue Huber(double s, double a) {
+  if (!(a > 0.0 && s > a * a))
+    return {s, 1.0};
+  const double root = std::sqrt(s);
+  return {2.0 * a * root - a * a, a / root};
+}
 
 // The Jet stride of the autodiff path (ceres::DynamicAutoDiffCostFunction): derivatives are
 // propagated kAutoDiffStride parameters at a time.
