@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <utility>
 #include <vector>
 
 // The PNG specification (ISO/IEC 15948, W3C "Portable Network Graphics (PNG) Specification"):
@@ -37,7 +38,8 @@ struct DecompressorFree {
 struct Buffers {
   std::unique_ptr<libdeflate_decompressor, DecompressorFree> decompressor{
       libdeflate_alloc_decompressor()};
-  std::vector<std::uint8_t> stream;  // the IDAT chunks' data, where there are several
+  std::vector<std::pair<const std::uint8_t*, std::size_t>> idat;  // the IDAT chunks' data
+  std::vector<std::uint8_t> stream;  // the IDAT chunks' data gathered, where there are several
   std::vector<std::uint8_t> rows;    // the inflated rows, each after its filter byte
   std::vector<std::uint8_t> zero;    // the row above the first
 
@@ -135,7 +137,8 @@ bool DecodePngDirect(const std::uint8_t* data, std::size_t size, std::uint64_t m
   // The chunks: IHDR first, consecutive IDATs, IEND; every critical chunk's CRC checked.
   std::uint32_t width = 0, height = 0;
   int depth = 0, channels = 0;
-  std::vector<std::pair<const std::uint8_t*, std::size_t>> idat;
+  std::vector<std::pair<const std::uint8_t*, std::size_t>>& idat = buffers.idat;
+  idat.clear();
   bool idat_done = false, ended = false;
   std::size_t at = sizeof(kSignature);
   while (!ended) {
