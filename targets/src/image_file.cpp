@@ -39,6 +39,10 @@ constexpr std::uint64_t kMaxBytes = std::uint64_t(1) << 30;
 // Each scan of a progressive JPEG is a pass over all of the image's coefficients, and a scan can
 // cost a few bytes: a crafted file makes thousands of passes. Real ones have ~10 scans.
 constexpr int kMaxJpegScans = 500;
+// The largest PNG file read whole for the direct decoder (png_direct.h): far above any camera's
+// frame (a 4K 16-bit RGB image is 50 MB decoded); a larger file streams through libpng, which
+// refuses a bad header after its first bytes instead of after reading the whole file.
+constexpr std::uint64_t kMaxWholeFile = std::uint64_t(64) << 20;
 // Enough bytes of a file's start to tell its format.
 constexpr std::size_t kHeadSize = 12;
 constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
@@ -491,14 +495,12 @@ cv::Mat ReadImageFile(const std::string& path) {
   const std::size_t n = std::fread(head, 1, sizeof(head), file.get());
   if (std::ferror(file.get()))
     throw fail(ErrnoText(errno));  // e.g. a folder
-  if (std::fseek(file.get(), 0, SEEK_SET) != 0)
-    throw fail(ErrnoText(errno));
   Source source;
   source.file = file.get();
   // A PNG of a regular file from memory (its direct decoder's way); a file that grew or shrank
-  // meanwhile, or any other, read as decoding goes.
+  // meanwhile, a larger one, or any other, read as decoding goes from its start.
   thread_local std::vector<std::uint8_t> bytes;
-  if (IsPng(head, n) && ReadWhole(file.get(), kMaxBytes, &bytes)) {
+  if (IsPng(head, n) && ReadWhole(file.get(), kMaxWholeFile, &bytes)) {
     source.file = nullptr;
     source.data = bytes.data();
     source.size = bytes.size();
