@@ -296,9 +296,9 @@ void SplineProblem<N, Rep>::EvaluateCameraCorners(const PreparedCamera& cam,
       const auto [first, last] = frames[f];
       // CornerResidual::Analytic's residual-only evaluation (WhitenedCornerResidual,
       // corner_residual.h), its pose shared: the shift time_offset + v line_delay is time_offset
-      // for every corner here.
+      // for every corner here (no line delay on this path).
       const std::int64_t stamp = cam.Stamp(first);
-      const double shift = s.time_offset + cam.corners[first].uv.y() * s.line_delay;
+      const double shift = s.time_offset;
       const int seg = SegmentOf(stamp, shift);
       const SegmentClock clock = SegmentClock::At(stamp, spline_.timing(), seg);
       const std::vector<double*> blocks = TrajBlocks(seg);
