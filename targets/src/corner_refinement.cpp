@@ -1,5 +1,5 @@
 // RefineCorner (detector.h): an X-junction's sub-pixel position and its noise covariance.
-#include <opencv2/imgproc.hpp>
+#include <opencv2/core.hpp>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -62,6 +62,40 @@ const std::vector<double>& WindowWeights(int h, std::vector<double>* uncached) {
   *uncached = ComputeWeights(h);
   return *uncached;
 }
+// The n x n patch whose centre sample lies at `at` (pixel centres at integer coordinates), each
+// sample bilinear in its four neighbours with the same weights (one sub-pixel offset for the whole
+// patch), as cv::getRectSubPix gives it (float, the border pixels repeated beyond the image) but
+// without its per-call set-up, which was a third of a tracked view's refinement.
+void SamplePatch(const cv::Mat& gray, const Eigen::Vector2d& at, int n, float* patch) {
+  const double x = at.x() - 0.5 * (n - 1), y = at.y() - 0.5 * (n - 1);
+  const double x_floor = std::floor(x), y_floor = std::floor(y);
+  const int ix = static_cast<int>(x_floor), iy = static_cast<int>(y_floor);
+  const float ax = static_cast<float>(x - x_floor), ay = static_cast<float>(y - y_floor);
+  const float w00 = (1.0f - ax) * (1.0f - ay), w01 = ax * (1.0f - ay);
+  const float w10 = (1.0f - ax) * ay, w11 = ax * ay;
+  const size_t step = gray.step[0];
+  if (ix >= 0 && iy >= 0 && ix + n < gray.cols && iy + n < gray.rows) {
+    for (int r = 0; r < n; ++r) {
+      const uint8_t* top = gray.ptr<uint8_t>(iy + r) + ix;
+      const uint8_t* bottom = top + step;
+      float* out = patch + r * n;
+      for (int c = 0; c < n; ++c)
+        out[c] = top[c] * w00 + top[c + 1] * w01 + bottom[c] * w10 + bottom[c + 1] * w11;
+    }
+    return;
+  }
+  const auto clamp_x = [&](int v) { return std::clamp(v, 0, gray.cols - 1); };
+  const auto clamp_y = [&](int v) { return std::clamp(v, 0, gray.rows - 1); };
+  for (int r = 0; r < n; ++r) {
+    const uint8_t* top = gray.ptr<uint8_t>(clamp_y(iy + r));
+    const uint8_t* bottom = gray.ptr<uint8_t>(clamp_y(iy + r + 1));
+    float* out = patch + r * n;
+    for (int c = 0; c < n; ++c) {
+      const int left = clamp_x(ix + c), right = clamp_x(ix + c + 1);
+      out[c] = top[left] * w00 + top[right] * w01 + bottom[left] * w10 + bottom[right] * w11;
+    }
+  }
+}
 }  // namespace
 
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
@@ -84,24 +118,25 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
   double weight_sum = 0.0;
   for (double w : weights)
     weight_sum += w;
-  cv::Mat patch;
-  // in_image[r * n + c]: the patch sample (r, c) lies in the image (outside, getRectSubPix and the
-  // clamped bilinear read repeat the border, which is no measurement).
-  std::vector<uint8_t> in_image(static_cast<size_t>(n * n));
-  // The patch centred on `at` (getRectSubPix: pixel centres at integer coordinates); with a warp,
-  // `at` and the patch are in rectified coordinates, each pixel read bilinearly at its image point.
+  // The patch (row-major, n x n floats), the thread's kept buffer: a tracked view refines a few
+  // hundred corners, each over a few iterations.
+  thread_local std::vector<float> patch_buffer;
+  patch_buffer.resize(static_cast<size_t>(n * n));
+  float* const patch = patch_buffer.data();
+  // in_image[r * n + c]: the patch sample (r, c) lies in the image (outside, the sampling repeats
+  // the border, which is no measurement).
+  std::vector<uint8_t> in_image;
   // all_in: every sample of the patch lies in the image (most corners; no flag to look at).
   bool all_in = false;
+  // The patch centred on `at` (pixel centres at integer coordinates); with a warp, `at` and the
+  // patch are in rectified coordinates, each pixel read bilinearly at its image point.
   const auto sample_patch = [&](const Eigen::Vector2d& at) {
-    all_in = false;
     if (warp == nullptr) {
-      cv::getRectSubPix(gray, cv::Size(n, n),
-                        cv::Point2f(static_cast<float>(at.x()), static_cast<float>(at.y())), patch,
-                        CV_32F);
-      if (inside(at, h + 1.0)) {
-        all_in = true;
+      SamplePatch(gray, at, n, patch);
+      all_in = inside(at, h + 1.0);
+      if (all_in)
         return;
-      }
+      in_image.resize(static_cast<size_t>(n * n));
       for (int r = 0; r < n; ++r) {
         for (int c = 0; c < n; ++c)
           in_image[static_cast<size_t>(r * n + c)] =
@@ -109,9 +144,10 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       }
       return;
     }
-    patch.create(n, n, CV_32F);
+    all_in = false;
+    in_image.resize(static_cast<size_t>(n * n));
     for (int r = 0; r < n; ++r) {
-      float* out = patch.ptr<float>(r);
+      float* out = patch + r * n;
       for (int c = 0; c < n; ++c) {
         const Eigen::Vector2d p = warp->ToImage(at + Eigen::Vector2d(c - h - 1, r - h - 1));
         in_image[static_cast<size_t>(r * n + c)] = inside(p, 0.0);
@@ -126,15 +162,25 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       }
     }
   };
-  // f(d, w, g) for every pixel of the window whose gradient is measured (its four neighbours in
-  // the image): its offset d from the centre, its weight w and the central-difference gradient g
-  // of the patch there. Returns the weight of those pixels.
+  // f(dx, dy, w, gx, gy) for every pixel of the window whose gradient is measured (its four
+  // neighbours in the image): its offset (dx, dy) from the centre, its weight w and the
+  // central-difference gradient (gx, gy) of the patch there. Returns the weight of those pixels.
   const auto for_each_gradient = [&](const auto& f) {
     double measured = 0.0;
     for (int dy = -h; dy <= h; ++dy) {
-      const float* row = patch.ptr<float>(dy + h + 1);
-      const float* up = patch.ptr<float>(dy + h);
-      const float* down = patch.ptr<float>(dy + h + 2);
+      const float* row = patch + (dy + h + 1) * n;
+      const float* up = row - n;
+      const float* down = row + n;
+      const double* weight_row = &weights[static_cast<size_t>((dy + h) * (2 * h + 1))] + h;
+      if (all_in) {
+        for (int dx = -h; dx <= h; ++dx) {
+          const int c = dx + h + 1;
+          const double w = weight_row[dx];
+          measured += w;
+          f(dx, dy, w, 0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
+        }
+        continue;
+      }
       const uint8_t* in_row = &in_image[static_cast<size_t>((dy + h + 1) * n)];
       const uint8_t* in_up = in_row - n;
       const uint8_t* in_down = in_row + n;
@@ -146,13 +192,12 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       const uint8_t* mirror_down = mirror_row + n;
       for (int dx = -h; dx <= h; ++dx) {
         const int c = dx + h + 1, m = h - dx + 1;
-        if (!all_in && !(in_row[c - 1] && in_row[c + 1] && in_up[c] && in_down[c] &&
-                         mirror_row[m - 1] && mirror_row[m + 1] && mirror_up[m] && mirror_down[m]))
+        if (!(in_row[c - 1] && in_row[c + 1] && in_up[c] && in_down[c] && mirror_row[m - 1] &&
+              mirror_row[m + 1] && mirror_up[m] && mirror_down[m]))
           continue;
-        const Eigen::Vector2d g(0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
-        const double w = weights[static_cast<size_t>((dy + h) * (2 * h + 1) + dx + h)];
+        const double w = weight_row[dx];
         measured += w;
-        f(Eigen::Vector2d(dx, dy), w, g);
+        f(dx, dy, w, 0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
       }
     }
     return measured;
@@ -166,14 +211,19 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     if (!inside(warp == nullptr ? q : warp->ToImage(q), kRefineMinBorderPx))
       return false;
     sample_patch(q);
-    G.setZero();
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    const double measured =
-        for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
-          const Eigen::Matrix2d wgg = w * g * g.transpose();
-          G += wgg;
-          b += wgg * d;  // p_i - q_current
-        });
+    // G and b = sum_i w_i g_i g_i^T d_i with d_i = p_i - q_current, as scalars (G symmetric).
+    double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
+    const double measured = for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
+      const double wgx = w * gx, wgy = w * gy;
+      const double along = gx * dx + gy * dy;  // g_i^T d_i
+      gxx += wgx * gx;
+      gxy += wgx * gy;
+      gyy += wgy * gy;
+      bx += wgx * along;
+      by += wgy * along;
+    });
+    G << gxx, gxy, gxy, gyy;
+    const Eigen::Vector2d b(bx, by);
     // Most of the window beyond the image: too little of the junction is seen.
     if (measured < kRefineMinMeasuredWeight * weight_sum)
       return false;
@@ -195,10 +245,15 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     return false;
   if (sigma_px != nullptr) {
     sample_patch(q);
-    Eigen::Matrix2d meat = Eigen::Matrix2d::Zero();
-    for_each_gradient([&](const Eigen::Vector2d& d, double w, const Eigen::Vector2d& g) {
-      meat += (w * w * d.squaredNorm()) * g * g.transpose();
+    double mxx = 0.0, mxy = 0.0, myy = 0.0;
+    for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
+      const double scale = w * w * (dx * dx + dy * dy);
+      mxx += scale * gx * gx;
+      mxy += scale * gx * gy;
+      myy += scale * gy * gy;
     });
+    Eigen::Matrix2d meat;
+    meat << mxx, mxy, mxy, myy;
     const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
     *sigma_px = std::sqrt(std::max(0.0, 0.5 * cov.trace()));
   }

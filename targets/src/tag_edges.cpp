@@ -76,11 +76,15 @@ TagEdgeFit FitTagEdges(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>
     bool ok = true;
     for (int j = 0; j < kSamples && ok; ++j) {
       const double t = 0.15 + 0.7 * j / (kSamples - 1);
-      const Eigen::Vector2d base = a + t * (b - a);
+      // The profile's points base + s outward map to H base + s H outward in homogeneous px:
+      // one division per sample.
+      const Eigen::Vector3d base = fit.H * (a + t * (b - a)).homogeneous();
+      const Eigen::Vector3d across = fit.H.leftCols<2>() * outward;
       double previous = -1.0, sum_g = 0.0, sum_gs = 0.0;
       for (double s = -reach; s <= reach + 1e-9 && ok; s += kStep) {
-        const Eigen::Vector2d uv = ToPixel(fit.H, base + s * outward);
-        const double value = SampleBilinear(gray, uv.x(), uv.y());
+        const Eigen::Vector3d p = base + s * across;
+        const double inverse_z = 1.0 / p.z();
+        const double value = SampleBilinear(gray, p.x() * inverse_z, p.y() * inverse_z);
         ok = value >= 0.0;
         if (ok && previous >= 0.0 && value > previous) {
           sum_g += value - previous;
@@ -158,17 +162,20 @@ int TagCornerHalfWindow(int black_border, double bit_px, double borders) {
 
 // The tags whose four corners are all among `corners`.
 TagCorners TagsOfCorners(const Board& board, const std::vector<DetectedCorner>& corners) {
-  std::map<int, Eigen::Vector2d> uv_of;
+  // Each corner id's position (the last of a repeated id, as a map filled in order keeps it).
+  std::vector<const Eigen::Vector2d*> uv_of(static_cast<size_t>(board.NumCorners()), nullptr);
   for (const DetectedCorner& c : corners)
-    uv_of[c.id] = c.uv;
+    if (c.id >= 0 && c.id < board.NumCorners())
+      uv_of[static_cast<size_t>(c.id)] = &c.uv;
   TagCorners tags;
   for (int id = 0; id < board.NumTags(); ++id) {
     const std::array<int, 4> ids = board.TagCornerIds(id);
-    if (std::all_of(ids.begin(), ids.end(), [&](int k) { return uv_of.count(k) > 0; })) {
+    if (std::all_of(ids.begin(), ids.end(),
+                    [&](int k) { return uv_of[static_cast<size_t>(k)] != nullptr; })) {
       std::array<Eigen::Vector2d, 4> c;
       for (size_t k = 0; k < 4; ++k)
-        c[k] = uv_of.at(ids[k]);
-      tags[id] = c;
+        c[k] = *uv_of[static_cast<size_t>(ids[k])];
+      tags.emplace_hint(tags.end(), id, c);
     }
   }
   return tags;
