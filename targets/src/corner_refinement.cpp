@@ -96,6 +96,46 @@ void SamplePatch(const cv::Mat& gray, const Eigen::Vector2d& at, int n, float* p
     }
   }
 }
+// The normal equations' sums over a window whose every pixel's gradient is measured (the patch
+// wholly inside the image, `patch` n x n with the window's (2h+1)^2 pixels inside its one-pixel
+// rim): G = sum w g g^T (gxx, gxy, gyy) and b = sum w g g^T d (bx, by), or with kMeat the
+// covariance's sum w^2 |d|^2 g g^T (mxx, mxy, myy) instead. One loop per row that the compiler
+// vectorises (the sums reassociated across its SIMD lanes).
+struct WindowSums {
+  double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
+};
+template <bool kMeat>
+WindowSums SumWholeWindow(const float* patch, int n, int h, const double* weights) {
+  double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
+  const int m = 2 * h + 1;
+  for (int dy = -h; dy <= h; ++dy) {
+    const float* row = patch + (dy + h + 1) * n + 1;  // the window's first pixel of the row
+    const float* up = row - n;
+    const float* down = row + n;
+    const double* w_row = weights + (dy + h) * m;
+#pragma omp simd reduction(+ : gxx, gxy, gyy, bx, by)
+    for (int k = 0; k < m; ++k) {
+      const double dx = k - h;
+      const double gx = 0.5 * static_cast<double>(row[k + 1] - row[k - 1]);
+      const double gy = 0.5 * static_cast<double>(down[k] - up[k]);
+      if constexpr (kMeat) {
+        const double scale = w_row[k] * w_row[k] * (dx * dx + dy * dy);
+        gxx += scale * gx * gx;
+        gxy += scale * gx * gy;
+        gyy += scale * gy * gy;
+      } else {
+        const double wgx = w_row[k] * gx, wgy = w_row[k] * gy;
+        const double along = gx * dx + gy * dy;  // g_i^T d_i
+        gxx += wgx * gx;
+        gxy += wgx * gy;
+        gyy += wgy * gy;
+        bx += wgx * along;
+        by += wgy * along;
+      }
+    }
+  }
+  return {gxx, gxy, gyy, bx, by};
+}
 }  // namespace
 
 bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, double* sigma_px,
@@ -213,15 +253,21 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
     sample_patch(q);
     // G and b = sum_i w_i g_i g_i^T d_i with d_i = p_i - q_current, as scalars (G symmetric).
     double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
-    const double measured = for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
-      const double wgx = w * gx, wgy = w * gy;
-      const double along = gx * dx + gy * dy;  // g_i^T d_i
-      gxx += wgx * gx;
-      gxy += wgx * gy;
-      gyy += wgy * gy;
-      bx += wgx * along;
-      by += wgy * along;
-    });
+    double measured = weight_sum;
+    if (all_in) {
+      const WindowSums sums = SumWholeWindow<false>(patch, n, h, weights.data());
+      gxx = sums.gxx, gxy = sums.gxy, gyy = sums.gyy, bx = sums.bx, by = sums.by;
+    } else {
+      measured = for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
+        const double wgx = w * gx, wgy = w * gy;
+        const double along = gx * dx + gy * dy;  // g_i^T d_i
+        gxx += wgx * gx;
+        gxy += wgx * gy;
+        gyy += wgy * gy;
+        bx += wgx * along;
+        by += wgy * along;
+      });
+    }
     G << gxx, gxy, gxy, gyy;
     const Eigen::Vector2d b(bx, by);
     // Most of the window beyond the image: too little of the junction is seen.
@@ -246,12 +292,17 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
   if (sigma_px != nullptr) {
     sample_patch(q);
     double mxx = 0.0, mxy = 0.0, myy = 0.0;
-    for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
-      const double scale = w * w * (dx * dx + dy * dy);
-      mxx += scale * gx * gx;
-      mxy += scale * gx * gy;
-      myy += scale * gy * gy;
-    });
+    if (all_in) {
+      const WindowSums sums = SumWholeWindow<true>(patch, n, h, weights.data());
+      mxx = sums.gxx, mxy = sums.gxy, myy = sums.gyy;
+    } else {
+      for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
+        const double scale = w * w * (dx * dx + dy * dy);
+        mxx += scale * gx * gx;
+        mxy += scale * gx * gy;
+        myy += scale * gy * gy;
+      });
+    }
     Eigen::Matrix2d meat;
     meat << mxx, mxy, mxy, myy;
     const Eigen::Matrix2d cov = (0.5 * noise_sigma * noise_sigma) * G_inv * meat * G_inv;
