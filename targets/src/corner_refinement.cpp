@@ -101,6 +101,27 @@ void SamplePatch(const cv::Mat& gray, const Eigen::Vector2d& at, int n, float* p
 // rim): G = sum w g g^T (gxx, gxy, gyy) and b = sum w g g^T d (bx, by), or with kMeat the
 // covariance's sum w^2 |d|^2 g g^T (mxx, mxy, myy) instead. One loop per row that the compiler
 // vectorises (the sums reassociated across its SIMD lanes).
+// One pixel's terms (offset d = (dx, dy), weight w, gradient g = (gx, gy)): w g g^T into G and
+// w g g^T d into b; with kMeat, w^2 |d|^2 g g^T into the covariance's middle (in gxx, gxy, gyy).
+template <bool kMeat>
+inline void AddPixel(double dx, double dy, double w, double gx, double gy, double& gxx, double& gxy,
+                     double& gyy, double& bx, double& by) {
+  if constexpr (kMeat) {
+    const double scale = w * w * (dx * dx + dy * dy);
+    gxx += scale * gx * gx;
+    gxy += scale * gx * gy;
+    gyy += scale * gy * gy;
+  } else {
+    const double wgx = w * gx, wgy = w * gy;
+    const double along = gx * dx + gy * dy;  // g^T d
+    gxx += wgx * gx;
+    gxy += wgx * gy;
+    gyy += wgy * gy;
+    bx += wgx * along;
+    by += wgy * along;
+  }
+}
+
 struct WindowSums {
   double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
 };
@@ -118,20 +139,7 @@ WindowSums SumWholeWindow(const float* patch, int n, int h, const double* weight
       const double dx = k - h;
       const double gx = 0.5 * static_cast<double>(row[k + 1] - row[k - 1]);
       const double gy = 0.5 * static_cast<double>(down[k] - up[k]);
-      if constexpr (kMeat) {
-        const double scale = w_row[k] * w_row[k] * (dx * dx + dy * dy);
-        gxx += scale * gx * gx;
-        gxy += scale * gx * gy;
-        gyy += scale * gy * gy;
-      } else {
-        const double wgx = w_row[k] * gx, wgy = w_row[k] * gy;
-        const double along = gx * dx + gy * dy;  // g_i^T d_i
-        gxx += wgx * gx;
-        gxy += wgx * gy;
-        gyy += wgy * gy;
-        bx += wgx * along;
-        by += wgy * along;
-      }
+      AddPixel<kMeat>(dx, dy, w_row[k], gx, gy, gxx, gxy, gyy, bx, by);
     }
   }
   return {gxx, gxy, gyy, bx, by};
@@ -259,13 +267,7 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       gxx = sums.gxx, gxy = sums.gxy, gyy = sums.gyy, bx = sums.bx, by = sums.by;
     } else {
       measured = for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
-        const double wgx = w * gx, wgy = w * gy;
-        const double along = gx * dx + gy * dy;  // g_i^T d_i
-        gxx += wgx * gx;
-        gxy += wgx * gy;
-        gyy += wgy * gy;
-        bx += wgx * along;
-        by += wgy * along;
+        AddPixel<false>(dx, dy, w, gx, gy, gxx, gxy, gyy, bx, by);
       });
     }
     G << gxx, gxy, gxy, gyy;
@@ -296,11 +298,9 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       const WindowSums sums = SumWholeWindow<true>(patch, n, h, weights.data());
       mxx = sums.gxx, mxy = sums.gxy, myy = sums.gyy;
     } else {
+      double unused_x = 0.0, unused_y = 0.0;
       for_each_gradient([&](int dx, int dy, double w, double gx, double gy) {
-        const double scale = w * w * (dx * dx + dy * dy);
-        mxx += scale * gx * gx;
-        mxy += scale * gx * gy;
-        myy += scale * gy * gy;
+        AddPixel<true>(dx, dy, w, gx, gy, mxx, mxy, myy, unused_x, unused_y);
       });
     }
     Eigen::Matrix2d meat;
