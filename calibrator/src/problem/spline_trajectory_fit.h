@@ -62,7 +62,12 @@ struct TrajectoryFitOptions {
   double sigma_accel = 0.2;      // m/s^2: guessed accelerometer intrinsics and bias
   bool use_accel = true;         // false: gravity is not estimated (no accelerometer residuals)
   int max_iterations = 20;
-  double relative_tolerance = 1e-6;  // stop at this relative cost decrease
+  // Stop once a step lowers the cost by less than this share of it. The fit only seeds the
+  // robust solve, whose first step lowers the calibration's cost by orders of magnitude (EuRoC's
+  // 36 s: 1.5e5 -> 2.5e4). On the cross-validation's subsets (every other 4 s block of camera
+  // views left out, the IMU alone across the gaps) it converges linearly, ~0.6 a step, and spent
+  // its last 8 of 20 steps (its limit) on 0.1 % of its cost under the 1e-6 it had.
+  double relative_tolerance = 1e-3;
   int threads = 1;                   // Assemble's; <= 1: serially
 };
 
