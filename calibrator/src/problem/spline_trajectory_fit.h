@@ -68,7 +68,7 @@ struct TrajectoryFitOptions {
   // views left out, the IMU alone across the gaps) it converges linearly, ~0.6 a step, and spent
   // its last 8 of 20 steps (its limit) on 0.1 % of its cost under the 1e-6 it had.
   double relative_tolerance = 1e-3;
-  int threads = 1;                   // Assemble's; <= 1: serially
+  int threads = 1;  // Assemble's; <= 1: serially
 };
 
 struct TrajectoryFitReport {
