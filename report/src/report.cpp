@@ -83,20 +83,13 @@ RigConfig LoadResult(const std::string& out_dir) {
   return LoadRig(result_path, &warnings);
 }
 
-// The report's threads: options.threads (0: the hardware's), at most 8.
-int ReportThreads(const ReportOptions& options) {
-  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
-                                               : std::thread::hardware_concurrency();
-  return static_cast<int>(std::clamp(threads, 1u, 8u));
-}
-
 ReportOutput Render(const std::string& out_dir, const RigConfig& rig, const ReportData& data,
                     const ReportOptions& options, StageClock* clock) {
   ReportOutput out;
   out.checks = EvaluateChecks(rig, data, options.thresholds);
   Builder builder(rig, data, options, out_dir);
-  const std::vector<Section> sections = builder.Build(
-      out.checks, (fs::path(out_dir) / "crosscheck.yaml").string(), ReportThreads(options));
+  const std::vector<Section> sections =
+      builder.Build(out.checks, (fs::path(out_dir) / "crosscheck.yaml").string());
   out.stages.push_back(clock->Lap("checks and figures' data"));
 
   if (!options.png_dir.empty())
@@ -147,7 +140,9 @@ ReportOutput Render(const std::string& out_dir, const RigConfig& rig, const Repo
     }
   };
   // `threads` in all: the PDF writer (which then joins the PNG workers) and threads - 1 workers.
-  const unsigned threads = static_cast<unsigned>(std::max(ReportThreads(options), 2));
+  const unsigned threads = std::clamp(options.threads > 0 ? static_cast<unsigned>(options.threads)
+                                                          : std::thread::hardware_concurrency(),
+                                      2u, 8u);
   std::vector<std::thread> pool;
   for (unsigned t = 1; t < threads; ++t)
     pool.emplace_back(worker);

@@ -8,17 +8,14 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "ctcal/report/plot.h"
 #include "ctcal/report/report.h"
-#include "ctcal/sensors/parallel_for.h"
 #include "report_format.h"
 
 namespace ctcal::report::detail {
@@ -52,35 +49,26 @@ class Builder {
 
   double Sec(std::int64_t t_ns) const { return 1e-9 * static_cast<double>(t_ns - t0_); }
 
-  // The sections in document order, built on up to `threads` threads (<= 1: in order on this
-  // one): each reads only the rig, the data and the folder, and fills its own slot.
-  std::vector<Section> Build(const std::vector<Check>& checks, const std::string& crosscheck,
-                             int threads = 1) {
-    std::vector<std::function<Section()>> parts;
-    parts.emplace_back([&] { return Summary(checks); });
-    parts.emplace_back([&] { return Parameters(); });
-    parts.emplace_back([&] { return KalibrSection(); });
-    parts.emplace_back([&] { return TrajectorySection(); });
+  std::vector<Section> Build(const std::vector<Check>& checks, const std::string& crosscheck) {
+    std::vector<Section> out;
+    out.push_back(Summary(checks));
+    out.push_back(Parameters());
+    out.push_back(KalibrSection());
+    out.push_back(TrajectorySection());
     for (const SensorConfig& s : rig_.sensors) {
       if (s.IsInertial())
-        parts.emplace_back([&] { return InertialSection(s); });
+        out.push_back(InertialSection(s));
     }
     for (const SensorConfig& s : rig_.sensors) {
       if (!s.IsInertial())
-        parts.emplace_back([&] { return CameraSection(s); });
+        out.push_back(CameraSection(s));
     }
-    parts.emplace_back([&] { return Histograms(); });
-    parts.emplace_back([&] { return CorrelationSection(); });
-    parts.emplace_back([&] { return ObservabilitySection(); });
-    parts.emplace_back([&] { return CrosscheckSection(crosscheck); });
-    parts.emplace_back([&] { return CrossValidationSection(); });
-    parts.emplace_back([&] { return ConfigSection(); });
-    std::vector<std::optional<Section>> built(parts.size());
-    ParallelFor(threads, parts.size(), [&](std::size_t i) { built[i].emplace(parts[i]()); });
-    std::vector<Section> out;
-    out.reserve(built.size());
-    for (std::optional<Section>& section : built)
-      out.push_back(std::move(*section));
+    out.push_back(Histograms());
+    out.push_back(CorrelationSection());
+    out.push_back(ObservabilitySection());
+    out.push_back(CrosscheckSection(crosscheck));
+    out.push_back(CrossValidationSection());
+    out.push_back(ConfigSection());
     return out;
   }
 
