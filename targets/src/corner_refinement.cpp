@@ -96,11 +96,6 @@ void SamplePatch(const cv::Mat& gray, const Eigen::Vector2d& at, int n, float* p
     }
   }
 }
-// The normal equations' sums over a window whose every pixel's gradient is measured (the patch
-// wholly inside the image, `patch` n x n with the window's (2h+1)^2 pixels inside its one-pixel
-// rim): G = sum w g g^T (gxx, gxy, gyy) and b = sum w g g^T d (bx, by), or with kMeat the
-// covariance's sum w^2 |d|^2 g g^T (mxx, mxy, myy) instead. One loop per row that the compiler
-// vectorises (the sums reassociated across its SIMD lanes).
 // One pixel's terms (offset d = (dx, dy), weight w, gradient g = (gx, gy)): w g g^T into G and
 // w g g^T d into b; with kMeat, w^2 |d|^2 g g^T into the covariance's middle (in gxx, gxy, gyy).
 template <bool kMeat>
@@ -122,6 +117,11 @@ inline void AddPixel(double dx, double dy, double w, double gx, double gy, doubl
   }
 }
 
+// The normal equations' sums over a window whose every pixel's gradient is measured (the patch
+// wholly inside the image, `patch` n x n with the window's (2h+1)^2 pixels inside its one-pixel
+// rim): G = sum w g g^T (gxx, gxy, gyy) and b = sum w g g^T d (bx, by), or with kMeat the
+// covariance's sum w^2 |d|^2 g g^T (mxx, mxy, myy) instead. One loop per row that the compiler
+// vectorises (the sums reassociated across its SIMD lanes).
 struct WindowSums {
   double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
 };
@@ -210,9 +210,10 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       }
     }
   };
-  // f(dx, dy, w, gx, gy) for every pixel of the window whose gradient is measured (its four
-  // neighbours in the image): its offset (dx, dy) from the centre, its weight w and the
-  // central-difference gradient (gx, gy) of the patch there. Returns the weight of those pixels.
+  // f(dx, dy, w, gx, gy) for every pixel of a window cut by the image border whose gradient is
+  // measured (its four neighbours in the image): its offset (dx, dy) from the centre, its weight
+  // w and the central-difference gradient (gx, gy) of the patch there. Returns the weight of those
+  // pixels. (A window wholly inside: SumWholeWindow.)
   const auto for_each_gradient = [&](const auto& f) {
     double measured = 0.0;
     for (int dy = -h; dy <= h; ++dy) {
@@ -220,15 +221,6 @@ bool RefineCorner(const cv::Mat& gray, int half_window, Eigen::Vector2d* uv, dou
       const float* up = row - n;
       const float* down = row + n;
       const double* weight_row = &weights[static_cast<size_t>((dy + h) * (2 * h + 1))] + h;
-      if (all_in) {
-        for (int dx = -h; dx <= h; ++dx) {
-          const int c = dx + h + 1;
-          const double w = weight_row[dx];
-          measured += w;
-          f(dx, dy, w, 0.5 * (row[c + 1] - row[c - 1]), 0.5 * (down[c] - up[c]));
-        }
-        continue;
-      }
       const uint8_t* in_row = &in_image[static_cast<size_t>((dy + h + 1) * n)];
       const uint8_t* in_up = in_row - n;
       const uint8_t* in_down = in_row + n;
