@@ -120,8 +120,8 @@ inline void AddPixel(double dx, double dy, double w, double gx, double gy, doubl
 // The normal equations' sums over a window whose every pixel's gradient is measured (the patch
 // wholly inside the image, `patch` n x n with the window's (2h+1)^2 pixels inside its one-pixel
 // rim): G = sum w g g^T (gxx, gxy, gyy) and b = sum w g g^T d (bx, by), or with kMeat the
-// covariance's sum w^2 |d|^2 g g^T (mxx, mxy, myy) instead. One loop per row that the compiler
-// vectorises (the sums reassociated across its SIMD lanes).
+// covariance's sum w^2 |d|^2 g g^T instead (in gxx, gxy, gyy; bx, by zero). One loop per row
+// that the compiler vectorises (the sums reassociated across its SIMD lanes).
 struct WindowSums {
   double gxx = 0.0, gxy = 0.0, gyy = 0.0, bx = 0.0, by = 0.0;
 };
