@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
 #include "ctcal/sensors/number_format.h"
@@ -30,26 +31,26 @@ const char* const kGroundTruthHeader =
 const char* const kGyroBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z";
 const char* const kImuBiasHeader = "#timestamp [ns],bw_x,bw_y,bw_z,ba_x,ba_y,ba_z";
 
-std::string Trim(const std::string& s) {
+std::string_view Trim(std::string_view s) {
   const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos)
-    return "";
+  if (b == std::string_view::npos)
+    return {};
   const auto e = s.find_last_not_of(" \t");
   return s.substr(b, e - b + 1);
 }
 
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> out;
+// The fields of `line`, trimmed, as views into it (a dataset has millions of fields: no copies).
+void SplitFields(std::string_view line, std::vector<std::string_view>* out) {
+  out->clear();
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = line.find(',', start);
-    out.push_back(
-        Trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-    if (comma == std::string::npos)
+    out->push_back(Trim(line.substr(
+        start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    if (comma == std::string_view::npos)
       break;
     start = comma + 1;
   }
-  return out;
 }
 
 // One CSV file read row by row, with the file and line in every error.
@@ -60,10 +61,10 @@ class CsvFile {
       throw std::runtime_error(path + ": cannot open file");
   }
 
-  // Reads the next data row; false at the end. Skips (and validates) the header line.
-  // `columns`: the required column count; the header, when present, must have the same.
-  bool Next(std::vector<std::string>* fields) {
-    std::string line;
+  // Reads the next data row; false at the end. Skips (and validates) the header line. The fields
+  // view the row's text: valid until the next call.
+  bool Next(std::vector<std::string_view>* fields) {
+    std::string& line = line_;
     while (std::getline(in_, line)) {
       ++line_no_;
       if (!line.empty() && line.back() == '\r')
@@ -72,7 +73,8 @@ class CsvFile {
       if (line_no_ == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0)
         line.erase(0, 3);
       if (line_no_ == 1 && !line.empty() && line[0] == '#') {
-        header_columns_ = static_cast<int>(SplitFields(line.substr(1)).size());
+        SplitFields(std::string_view(line).substr(1), fields);
+        header_columns_ = static_cast<int>(fields->size());
         continue;
       }
       // Blank lines at the end of a file (as some writers leave them) end it; one followed by a
@@ -86,7 +88,7 @@ class CsvFile {
         line_no_ = blank_line_no_;
         Fail("empty line (a dataset file has one row per line, no blank lines)");
       }
-      *fields = SplitFields(line);
+      SplitFields(line, fields);
       return true;
     }
     return false;
@@ -105,7 +107,8 @@ class CsvFile {
     }
   }
 
-  void CheckColumns(const std::vector<std::string>& f, int columns, const char* expected) const {
+  void CheckColumns(const std::vector<std::string_view>& f, int columns,
+                    const char* expected) const {
     if (static_cast<int>(f.size()) != columns) {
       Fail("expected " + std::to_string(columns) + " columns (" + expected + "), got " +
            std::to_string(f.size()));
@@ -116,44 +119,45 @@ class CsvFile {
     throw std::runtime_error(path_ + ":" + std::to_string(line_no_) + ": " + what);
   }
 
-  std::int64_t Stamp(const std::string& s) const {
+  std::int64_t Stamp(std::string_view s) const {
     std::int64_t v = 0;
     const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
     if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size())
-      Fail("timestamp '" + s + "' is not an integer number of nanoseconds");
+      Fail("timestamp '" + std::string(s) + "' is not an integer number of nanoseconds");
     return v;
   }
 
-  int Int(const std::string& s, const char* what) const {
+  int Int(std::string_view s, const char* what) const {
     int v = 0;
     const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
     if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size())
-      Fail(std::string(what) + " '" + s + "' is not an integer");
+      Fail(std::string(what) + " '" + std::string(s) + "' is not an integer");
     return v;
   }
 
-  double Number(const std::string& s, const char* what) const {
+  double Number(std::string_view s, const char* what) const {
     double v = 0.0;
     if (!ParseDouble(s, &v))
-      Fail(std::string(what) + " '" + s + "' is not a number");
+      Fail(std::string(what) + " '" + std::string(s) + "' is not a number");
     if (!std::isfinite(v))
-      Fail(std::string(what) + " is " + s + " (NaN and Inf are not measurements)");
+      Fail(std::string(what) + " is " + std::string(s) + " (NaN and Inf are not measurements)");
     return v;
   }
 
-  Eigen::Vector3d Vector3(const std::vector<std::string>& f, int first, const char* what) const {
+  Eigen::Vector3d Vector3(const std::vector<std::string_view>& f, int first,
+                          const char* what) const {
     return Eigen::Vector3d(Number(f[first], what), Number(f[first + 1], what),
                            Number(f[first + 2], what));
   }
 
   // A reading: finite, and within `range` on every axis when one is given (InertialRange).
-  Eigen::Vector3d Reading(const std::vector<std::string>& f, int first, const char* what,
+  Eigen::Vector3d Reading(const std::vector<std::string_view>& f, int first, const char* what,
                           const double* range, const char* unit) const {
     const Eigen::Vector3d v = Vector3(f, first, what);
     for (int k = 0; range && k < 3; ++k) {
       if (std::abs(v[k]) > *range) {
-        Fail(std::string(what) + " " + f[first + k] + " " + unit + " is beyond any IMU's range (" +
-             FormatDouble(*range) + " " + unit +
+        Fail(std::string(what) + " " + std::string(f[first + k]) + " " + unit +
+             " is beyond any IMU's range (" + FormatDouble(*range) + " " + unit +
              " per axis): a corrupt sample, or not in the SPEC's units");
       }
     }
@@ -175,6 +179,7 @@ class CsvFile {
  private:
   std::string path_;
   std::ifstream in_;
+  std::string line_;  // the current row's text, which Next's fields view
   int line_no_ = 0;
   int blank_line_no_ = 0;  // the first blank line, 0 while there is none
   int header_columns_ = 0;
@@ -270,7 +275,7 @@ std::vector<ImuSample> ReadImuCsv(const std::string& path, Warnings* warnings,
   CsvFile csv(path);
   std::vector<ImuSample> out;
   std::vector<std::int64_t> stamps;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   while (csv.Next(&f)) {
     csv.CheckHeader(7, kImuHeader);
     csv.CheckColumns(f, 7, kImuHeader);
@@ -295,7 +300,7 @@ std::vector<GyroSample> ReadGyroCsv(const std::string& path, Warnings* warnings,
   CsvFile csv(path);
   std::vector<GyroSample> out;
   std::vector<std::int64_t> stamps;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   while (csv.Next(&f)) {
     csv.CheckHeader(4, kGyroHeader);
     csv.CheckColumns(f, 4, kGyroHeader);
@@ -319,7 +324,7 @@ std::vector<ImageEntry> ReadImageCsv(const std::string& path, bool check_images,
   const fs::path image_dir = fs::path(path).parent_path() / "data";
   std::vector<ImageEntry> out;
   std::vector<std::int64_t> stamps;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   int missing = 0;
   std::string first_missing;
   int first_missing_line = 0;
@@ -329,7 +334,7 @@ std::vector<ImageEntry> ReadImageCsv(const std::string& path, bool check_images,
     ImageEntry e;
     e.t_ns = csv.Stamp(f[0]);
     csv.CheckIncreasing(e.t_ns, out.empty(), out.empty() ? 0 : out.back().t_ns);
-    e.filename = f[1];
+    e.filename = std::string(f[1]);
     if (e.filename.empty())
       csv.Fail("empty filename");
     if (check_images && !fs::is_regular_file(image_dir / e.filename)) {
@@ -356,9 +361,12 @@ std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_c
                                               const CornerImage* image) {
   CsvFile csv(path);
   std::vector<CornerObservation> out;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   int columns = 0;
-  std::set<int> ids_in_frame;
+  // The frame (its index in the file) that last held each corner id: a duplicate within a frame
+  // in O(1), without a set per frame (a minute's corners are 300k rows).
+  std::vector<int> frame_of_id(static_cast<std::size_t>(std::max(num_corners, 0)), -1);
+  int frame = 0;
   while (csv.Next(&f)) {
     if (columns == 0) {
       columns = csv.header_columns() != 0 ? csv.header_columns() : static_cast<int>(f.size());
@@ -375,7 +383,7 @@ std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_c
         csv.Fail("timestamp " + std::to_string(c.t_ns) + " is before the previous frame (" +
                  std::to_string(out.back().t_ns) + "); frames must be in increasing time");
       }
-      ids_in_frame.clear();
+      ++frame;
     }
     if (out.empty() || c.t_ns != out.back().t_ns) {
       if (frame_stamps && !frame_stamps->count(c.t_ns)) {
@@ -388,23 +396,26 @@ std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_c
       csv.Fail("corner_id " + std::to_string(c.corner_id) + " is outside the target (ids 0.." +
                std::to_string(num_corners - 1) + ")");
     }
-    if (!ids_in_frame.insert(c.corner_id).second) {
+    int& seen_in = frame_of_id[static_cast<std::size_t>(c.corner_id)];
+    if (seen_in == frame) {
       csv.Fail("corner_id " + std::to_string(c.corner_id) + " appears twice in frame " +
                std::to_string(c.t_ns));
     }
+    seen_in = frame;
     c.u = csv.Number(f[2], "u");
     c.v = csv.Number(f[3], "v");
     if (columns == 5) {
       c.sigma = csv.Number(f[4], "sigma");
       if (!(*c.sigma > 0.0))
-        csv.Fail("sigma must be > 0 px, got " + f[4]);
+        csv.Fail("sigma must be > 0 px, got " + std::string(f[4]));
     }
     if (image) {
       const double margin = 0.5 + 5.0 * c.sigma.value_or(image->pixel_sigma);
       if (!(c.u >= -margin && c.u <= image->width - 1 + margin && c.v >= -margin &&
             c.v <= image->height - 1 + margin)) {
-        csv.Fail("corner (" + f[2] + ", " + f[3] + ") is outside the camera's " +
-                 std::to_string(image->width) + "x" + std::to_string(image->height) +
+        csv.Fail("corner (" + std::string(f[2]) + ", " + std::string(f[3]) +
+                 ") is outside the camera's " + std::to_string(image->width) + "x" +
+                 std::to_string(image->height) +
                  " image (by more than 5 sigma): another camera's corners, or the wrong "
                  "resolution?");
       }
@@ -417,7 +428,7 @@ std::vector<CornerObservation> ReadCornersCsv(const std::string& path, int num_c
 std::vector<GroundTruthState> ReadGroundTruthCsv(const std::string& path) {
   CsvFile csv(path);
   std::vector<GroundTruthState> out;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   while (csv.Next(&f)) {
     csv.CheckHeader(17, kGroundTruthHeader);
     csv.CheckColumns(f, 17, kGroundTruthHeader);
@@ -443,7 +454,7 @@ std::vector<BiasSample> ReadBiasesCsv(const std::string& path, bool with_accel) 
   const int columns = with_accel ? 7 : 4;
   const char* header = with_accel ? kImuBiasHeader : kGyroBiasHeader;
   std::vector<BiasSample> out;
-  std::vector<std::string> f;
+  std::vector<std::string_view> f;
   while (csv.Next(&f)) {
     csv.CheckHeader(columns, header);
     csv.CheckColumns(f, columns, header);

@@ -155,6 +155,10 @@ const std::vector<BadFile>& Corpus() {
       {"corners_duplicate_id.csv",
        Reader::kCorners,
        {"corners_duplicate_id.csv:3:", "corner_id 3 appears twice in frame 1000"}},
+      // Ids repeat from frame to frame; only a repeat within one frame is an error.
+      {"corners_duplicate_id_later_frame.csv",
+       Reader::kCorners,
+       {"corners_duplicate_id_later_frame.csv:6:", "corner_id 3 appears twice in frame 2000"}},
       {"corners_frame_order.csv",
        Reader::kCorners,
        {"corners_frame_order.csv:3:", "before the previous frame"}},
