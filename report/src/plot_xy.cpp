@@ -57,30 +57,43 @@ class DotRaster {
       return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
     };
     const std::uint32_t alpha = channel(c.a), r = channel(c.r), g = channel(c.g), b = channel(c.b);
+    if (alpha != coverage_alpha_) {
+      // The dot's opacity per mask pixel, (alpha m + 127) / 255: a series' dots share their alpha.
+      coverage_alpha_ = alpha;
+      coverage_.resize(mask_.size());
+      for (size_t k = 0; k < mask_.size(); ++k)
+        coverage_[k] = static_cast<std::uint8_t>((alpha * mask_[k] + 127u) / 255u);
+    }
     const std::uint32_t opaque = 0xff000000u | (r << 16) | (g << 8) | b;
+    // The source's channels two to a word, each in 16 bits: red and blue, alpha (255) and green.
+    const std::uint32_t src_rb = (r << 16) | b, src_ag = (255u << 16) | g;
     for (int dy = -reach_; dy <= reach_; ++dy) {
       const int py = cy + dy;
       if (py < 0 || py >= h_)
         continue;
       auto* row = reinterpret_cast<std::uint32_t*>(data_ + static_cast<size_t>(py) * stride_);
-      const std::uint8_t* m = &mask_[static_cast<size_t>(dy + reach_) * side];
+      const std::uint8_t* m = &coverage_[static_cast<size_t>(dy + reach_) * side];
       // Only the disc's own pixels of this row (the mask is 0 outside [first, last]).
       const auto [first, last] = span_[static_cast<size_t>(dy + reach_)];
       for (int dx = std::max(first, -cx); dx <= std::min(last, w_ - 1 - cx); ++dx) {
         const int px = cx + dx;
-        const std::uint32_t a = (alpha * m[dx + reach_] + 127) / 255;
+        const std::uint32_t a = m[dx + reach_];
         if (a == 255) {  // "over" with full coverage is the source itself
           row[px] = opaque;
           continue;
         }
         if (a == 0)
           continue;
-        // Premultiplied ARGB32 "over": out = src a + (1 - a) dst, per 8-bit channel.
+        // Premultiplied ARGB32 "over", out = (src a + dst (255 - a) + 127) / 255 per 8-bit
+        // channel, two channels at a time: each sum is below 2^16, and (t + (t >> 8)) >> 8 of
+        // t = sum + 128 is that quotient exactly for sums up to 255^2.
         const std::uint32_t d = row[px];
-        const auto over = [&](int shift, std::uint32_t src) {
-          return ((src * a + ((d >> shift) & 0xffu) * (255u - a) + 127u) / 255u) << shift;
-        };
-        row[px] = over(24, 255u) | over(16, r) | over(8, g) | over(0, b);
+        const std::uint32_t ia = 255u - a;
+        std::uint32_t rb = src_rb * a + (d & 0x00ff00ffu) * ia + 0x00800080u;
+        std::uint32_t ag = src_ag * a + ((d >> 8) & 0x00ff00ffu) * ia + 0x00800080u;
+        rb = ((rb + ((rb >> 8) & 0x00ff00ffu)) >> 8) & 0x00ff00ffu;
+        ag = (ag + ((ag >> 8) & 0x00ff00ffu)) & 0xff00ff00u;
+        row[px] = rb | ag;
       }
     }
   }
@@ -104,6 +117,8 @@ class DotRaster {
   int stride_ = 0;
   int reach_ = 0;
   std::vector<std::uint8_t> mask_;         // disc coverage, 0..255
+  std::vector<std::uint8_t> coverage_;     // mask_ times the dots' alpha (Stamp)
+  std::uint32_t coverage_alpha_ = 256;     // the alpha coverage_ holds (256: none yet)
   std::vector<std::pair<int, int>> span_;  // per mask row, the dx range of non-zero coverage
 };
 
@@ -439,13 +454,25 @@ void XYPlot::Draw(void* cairo, const Rect& area) const {
           raster.PaintOnto(cr);
           break;
         }
+        // Each dot a zero-length subpath stroked with round caps at twice its radius: the disc
+        // cairo_arc's fill would give (cairo and the PDF format both paint such a subpath as a
+        // filled circle), written on a PDF page as "x y m x y l S" instead of two Bezier arcs.
+        // The demo report's page text, which cairo formats and deflates on the report's longest
+        // thread, 4.2 -> 3.6 MB.
+        cairo_save(cr);
+        cairo_set_dash(cr, nullptr, 0, 0.0);
+        cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+        cairo_set_line_width(cr, 2.0 * s.width);
         for (size_t i = 0; i < n; ++i) {
           if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
             continue;
           SetColor(cr, color_of(i));
-          cairo_arc(cr, ax.X(s.x[i]), ax.Y(s.y[i]), s.width, 0, 2 * M_PI);
-          cairo_fill(cr);
+          const double x = ax.X(s.x[i]), y = ax.Y(s.y[i]);
+          cairo_move_to(cr, x, y);
+          cairo_line_to(cr, x, y);
+          cairo_stroke(cr);
         }
+        cairo_restore(cr);
         break;
       }
       case Series::Kind::kBand: {

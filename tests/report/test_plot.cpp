@@ -36,13 +36,17 @@ Figure LineFigure(const std::vector<double>& y) {
   return f;
 }
 
-std::string PdfText(const Figure& f) {
+// `f` as the one page of DIR/f.pdf in a new temporary DIR, which it returns.
+std::string WritePdf(const Figure& f) {
   const std::string dir = test::MakeTempDir("ctcal_plot");
-  {
-    PdfDocument pdf(dir + "/f.pdf");
-    pdf.AddPage(f);
-    pdf.Close();
-  }
+  PdfDocument pdf(dir + "/f.pdf");
+  pdf.AddPage(f);
+  pdf.Close();
+  return dir;
+}
+
+std::string PdfText(const Figure& f) {
+  const std::string dir = WritePdf(f);
   const std::string cmd = "pdftotext " + dir + "/f.pdf " + dir + "/f.txt";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::ifstream t(dir + "/f.txt");
@@ -141,6 +145,37 @@ TEST(Plot, EveryPanelKindDrawsToPngSvgAndPdf) {
   const std::string svg = RenderSvg(f);
   EXPECT_NE(svg.find("<svg"), std::string::npos);
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
+}
+
+// Vector dots (a scatter of up to a few thousand points) are discs of the series' radius in the
+// PNG and on the PDF page alike: the page draws each as a zero-length round-capped stroke, which
+// both cairo and a PDF renderer (poppler's pdftoppm here) must paint as a filled circle.
+TEST(Plot, ScatterDotsAreDiscsOfTheirRadiusInPngAndPdf) {
+  Figure f(1, 1, 400, 300);
+  auto& p = f.Add<XYPlot>();
+  p.x_min = 0.0;
+  p.x_max = 10.0;
+  p.y_min = 0.0;
+  p.y_max = 10.0;
+  p.legend = false;
+  constexpr double kRadius = 5.0;  // pt
+  p.Scatter({2.5, 5.0, 7.5}, {2.5, 7.5, 5.0}, "", Color{0, 0, 0, 1}, kRadius);
+  const auto dark_area = [](const cv::Mat& gray) {
+    // The dots only: the plot area inside the frame (no ticks or labels), pixels below mid-grey.
+    const cv::Mat inner = gray(cv::Rect(90, 50, gray.cols - 130, gray.rows - 110));
+    return static_cast<double>(cv::countNonZero(inner < 128));
+  };
+  const double disc = M_PI * kRadius * kRadius;  // px at 1 px per pt
+  const double png = dark_area(Decode(RenderPng(f, 1.0)));
+  EXPECT_NEAR(png, 3.0 * disc, 0.25 * 3.0 * disc);
+  const std::string dir = WritePdf(f);
+  const std::string cmd = "pdftoppm -r 72 -gray -png " + dir + "/f.pdf " + dir + "/page";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const cv::Mat page = cv::imread(dir + "/page-1.png", cv::IMREAD_GRAYSCALE);
+  std::filesystem::remove_all(dir);
+  ASSERT_FALSE(page.empty());
+  ASSERT_EQ(page.cols, 400);
+  EXPECT_NEAR(dark_area(page), png, 0.25 * png);
 }
 
 TEST(Plot, UnwritablePdfThrowsNamingThePath) {
