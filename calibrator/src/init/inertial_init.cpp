@@ -132,18 +132,19 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
   std::vector<double> weight(static_cast<std::size_t>(n), 1.0);
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  // The weighted sums of the next iteration's means, accumulated where the weights are set (the
+  // same sums in the same order as a pass of their own).
+  double sw = 0.0;
+  Eigen::Vector3d sum_B = Eigen::Vector3d::Zero(), sum_S = Eigen::Vector3d::Zero();
+  for (int k = 0; k < n; ++k) {
+    sw += 1.0;
+    sum_B += 1.0 * w_B[static_cast<std::size_t>(k)];
+    sum_S += 1.0 * w_S[static_cast<std::size_t>(k)];
+  }
   for (int iteration = 0; iteration < 8; ++iteration) {
     // For a fixed R the best c is the weighted mean of w_B - R w_S, so centring both sides by
     // their weighted means leaves a weighted orthogonal Procrustes problem (Kabsch).
-    double sw = 0.0;
-    Eigen::Vector3d mean_B = Eigen::Vector3d::Zero(), mean_S = Eigen::Vector3d::Zero();
-    for (int k = 0; k < n; ++k) {
-      sw += weight[static_cast<std::size_t>(k)];
-      mean_B += weight[static_cast<std::size_t>(k)] * w_B[static_cast<std::size_t>(k)];
-      mean_S += weight[static_cast<std::size_t>(k)] * w_S[static_cast<std::size_t>(k)];
-    }
-    mean_B /= sw;
-    mean_S /= sw;
+    const Eigen::Vector3d mean_B = sum_B / sw, mean_S = sum_S / sw;
     Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
     for (int k = 0; k < n; ++k)
       H += weight[static_cast<std::size_t>(k)] * (w_B[static_cast<std::size_t>(k)] - mean_B) *
@@ -159,10 +160,17 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
     R = U * S * V.transpose();
     c = mean_B - R * mean_S;
     result.singular_values = (Eigen::Vector3d(svd.singularValues()) / sw).cwiseSqrt();
+    sw = 0.0;
+    sum_B.setZero();
+    sum_S.setZero();
     for (int k = 0; k < n; ++k) {
-      const double e =
-          (w_B[static_cast<std::size_t>(k)] - R * w_S[static_cast<std::size_t>(k)] - c).norm();
-      weight[static_cast<std::size_t>(k)] = HuberWeight(e, options.huber_rad_s);
+      const Eigen::Vector3d& b = w_B[static_cast<std::size_t>(k)];
+      const Eigen::Vector3d& v = w_S[static_cast<std::size_t>(k)];
+      const double w = HuberWeight((b - R * v - c).norm(), options.huber_rad_s);
+      weight[static_cast<std::size_t>(k)] = w;
+      sw += w;
+      sum_B += w * b;
+      sum_S += w * v;
     }
   }
   double sq = 0.0;
