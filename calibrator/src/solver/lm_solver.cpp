@@ -70,6 +70,26 @@ struct Scratch {
   Eigen::MatrixXd G;  // J^T J of the block (NormalEquations::AddBlock)
 };
 
+// out(r, t) = sum_k a(r, k) p(k, t) for the rows of a row-major `a` (rows x ambient) and
+// `p` (ambient x tangent), into the rows of a row-major matrix with `stride` columns; the sizes
+// fixed at compile time where A and T are not Eigen::Dynamic.
+template <int A, int T>
+void LiftRows(const double* a, int rows, const double* p, double* out, int stride, int ambient = A,
+              int tangent = T) {
+  if constexpr (A != Eigen::Dynamic) {
+    ambient = A;
+    tangent = T;
+  }
+  for (int row = 0; row < rows; ++row, a += ambient, out += stride) {
+    for (int t = 0; t < tangent; ++t) {
+      double v = 0.0;
+      for (int k = 0; k < ambient; ++k)
+        v += a[k] * p[k * tangent + t];
+      out[t] = v;
+    }
+  }
+}
+
 // Ceres' robust loss applied to a block's residuals and Jacobian (Triggs et al., "Bundle
 // Adjustment - A Modern Synthesis", as ceres::internal::Corrector): with s = |r|^2 and rho(s), the
 // cost is rho(s) / 2 and the block is replaced by r' = sqrt(rho') / (1 - a) r, J' = sqrt(rho')
@@ -352,9 +372,16 @@ bool LevenbergMarquardt::Impl::EvaluateBlock(const Block& b, bool jacobian, Scra
       const Eigen::Map<const RowMatrix> Ja(s->ambient[i].data(), b.rows, c.ambient);
       if (!Ja.allFinite())
         return false;
-      if (c.manifold != nullptr)
-        s->J.middleCols(first, c.tangent).noalias() = Ja * c.plus_jacobian;
-      else
+      if (c.manifold != nullptr) {
+        // A few ambient coordinates (a quaternion's 4) per row: plain loops, which Eigen's
+        // general product kernel (its packing and blocking set up per block) cost more
+        // instructions for. Each entry summed from zero in the ambient order, as that kernel did.
+        if (c.ambient == 4 && c.tangent == 3)
+          LiftRows<4, 3>(Ja.data(), b.rows, c.plus_jacobian.data(), &s->J(0, first), b.cols);
+        else
+          LiftRows<Eigen::Dynamic, Eigen::Dynamic>(Ja.data(), b.rows, c.plus_jacobian.data(),
+                                                   &s->J(0, first), b.cols, c.ambient, c.tangent);
+      } else
         s->J.middleCols(first, c.tangent) = Ja;
       first += c.tangent;
     }
