@@ -133,13 +133,12 @@ HandEyeResult InitRotationHandEye(const std::string& sensor_name, const BaseRate
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   // The weighted sums of the next iteration's means, accumulated where the weights are set (the
-  // same sums in the same order as a pass of their own).
-  double sw = 0.0;
+  // same sums in the same order as a pass of their own); the first iteration's weights are 1.
+  double sw = static_cast<double>(n);
   Eigen::Vector3d sum_B = Eigen::Vector3d::Zero(), sum_S = Eigen::Vector3d::Zero();
   for (int k = 0; k < n; ++k) {
-    sw += 1.0;
-    sum_B += 1.0 * w_B[static_cast<std::size_t>(k)];
-    sum_S += 1.0 * w_S[static_cast<std::size_t>(k)];
+    sum_B += w_B[static_cast<std::size_t>(k)];
+    sum_S += w_S[static_cast<std::size_t>(k)];
   }
   for (int iteration = 0; iteration < 8; ++iteration) {
     // For a fixed R the best c is the weighted mean of w_B - R w_S, so centring both sides by
