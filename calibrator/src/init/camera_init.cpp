@@ -1,5 +1,3 @@
-#include <ceres/ceres.h>
-
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -8,9 +6,9 @@
 #include <memory>
 #include <opencv2/calib3d.hpp>
 
-#include "corner_reprojection.h"
 #include "ctcal/calibrator/init/camera_init.h"
 #include "ctcal/spline/so3.h"
+#include "intrinsics_refinement.h"
 
 namespace ctcal {
 
@@ -81,17 +79,6 @@ double ClosedFormFocalScale(const CameraModel& guess, const Board& board,
   return (k > 0.5 && k < 2.0) ? k : 1.0;
 }
 
-struct ViewState {
-  Eigen::Quaterniond q_C_W;
-  Eigen::Vector3d t_C_W;
-};
-
-struct CornerRef {
-  int view = 0;
-  Eigen::Vector3d p_W;
-  Eigen::Vector2d uv;
-};
-
 // Projection residual norms of all corners with the given parameters and poses; NaN where the
 // model cannot project.
 std::vector<double> ReprojectionErrors(const CameraModel& camera,
@@ -146,20 +133,18 @@ double PnpRms(const CameraModel& camera, const Board& board,
 }
 
 // One refinement: intrinsics (distortion held when !free_distortion) and all poses, corners with
-// keep[k] only, Cauchy loss. Ceres gives up at once when a residual cannot be evaluated at the
-// start ("Residual and Jacobian evaluation failed"): a corner that the start values cannot
+// keep[k] only, Cauchy loss (intrinsics_refinement.h). A corner that the start values cannot
 // project (a guess whose distortion folds the outer field, a PnP pose that puts a corner of a
 // grazing view behind the camera) is left out of this refinement and counted in
-// `*unprojectable`; it is back in the next one if it projects there.
+// `*unprojectable`: a step that makes a corner unprojectable is rejected, so none may be at the
+// start; it is back in the next refinement if it projects there.
 bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vector<CornerRef>& refs,
             const std::vector<char>& keep, bool free_distortion,
             const IntrinsicsInitOptions& options, int* unprojectable) {
   Eigen::VectorXd params = camera->params();
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  ceres::CauchyLoss loss(options.cauchy_px);
   const std::vector<double> start_errors = ReprojectionErrors(*camera, *views, refs);
+  std::vector<CornerRef> corners;
+  corners.reserve(refs.size());
   *unprojectable = 0;
   for (std::size_t k = 0; k < refs.size(); ++k) {
     if (!keep[k])
@@ -168,52 +153,20 @@ bool Refine(CameraModel* camera, std::vector<ViewState>* views, const std::vecto
       ++*unprojectable;
       continue;
     }
-    ViewState& v = (*views)[static_cast<std::size_t>(refs[k].view)];
-    ceres::CostFunction* cost = VisitCameraModel(camera->type(), [&](auto model) {
-      using Model = decltype(model);
-      return static_cast<ceres::CostFunction*>(
-          new CornerReprojection<Model>(refs[k].p_W, refs[k].uv));
-    });
-    problem.AddResidualBlock(cost, &loss, params.data(), v.q_C_W.coeffs().data(), v.t_C_W.data());
+    corners.push_back(refs[k]);
   }
-  for (ViewState& v : *views)
-    if (problem.HasParameterBlock(v.q_C_W.coeffs().data()))
-      problem.SetManifold(v.q_C_W.coeffs().data(), new ceres::EigenQuaternionManifold);
-  const int num_intrinsics = camera->NumIntrinsics();
-  if (!free_distortion && camera->NumDistortionCoeffs() > 0) {
-    std::vector<int> fixed;
-    for (int i = num_intrinsics; i < camera->NumParams(); ++i)
-      fixed.push_back(i);
-    problem.SetManifold(params.data(), new ceres::SubsetManifold(camera->NumParams(), fixed));
-  }
+  IntrinsicsRefinementOptions refinement;
+  refinement.cauchy_px = options.cauchy_px;
+  refinement.max_iterations = options.max_iterations;
+  if (!free_distortion && camera->NumDistortionCoeffs() > 0)
+    refinement.first_held_param = camera->NumIntrinsics();
   Eigen::VectorXd lower, upper;
   camera->ParamBounds(&lower, &upper);
-  for (int i = 0; i < camera->NumParams(); ++i) {
-    if (std::isfinite(lower[i]))
-      problem.SetParameterLowerBound(params.data(), i, lower[i]);
-    if (std::isfinite(upper[i]))
-      problem.SetParameterUpperBound(params.data(), i, upper[i]);
-  }
-  ceres::Solver::Options solver_options;
-  // The normal equations (the intrinsics and 60 poses: ~370 columns, each pose block touching
-  // only the intrinsics) by a sparse Cholesky factorisation: the same steps as the Schur
-  // complement on the poses, 25-30 % less time per solve (Kalibr-style 60 views, 72 iterations:
-  // Ceres' DENSE_SCHUR spent half of it in its eliminator's small blocks and locks).
-  solver_options.linear_solver_type =
-      ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE)
-          ? ceres::SPARSE_NORMAL_CHOLESKY
-          : ceres::DENSE_SCHUR;
-  solver_options.max_num_iterations = options.max_iterations;
-  // One thread: Ceres hands residual blocks to its threads as they come free and sums the
-  // threads' partial costs and gradients, and its Schur eliminator adds the views' outer products
-  // to the reduced camera matrix in the order the threads finish, so on 2 threads the last bits
-  // of these intrinsics (which seed the whole calibration) changed from run to run. A run must
-  // give the same bits for the same data and --threads (docs/calibrator.md, Reproducibility).
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
-  if (!summary.IsSolutionUsable())
+  // One thread: a run gives the same bits for the same data and --threads
+  // (docs/calibrator.md, Reproducibility), and the solve is a few milliseconds an iteration.
+  const IntrinsicsRefinementSummary summary =
+      RefineIntrinsicsAndPoses(camera->type(), &params, lower, upper, views, corners, refinement);
+  if (!summary.usable)
     return false;
   try {
     camera->SetParams(params);

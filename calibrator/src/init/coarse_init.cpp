@@ -109,7 +109,7 @@ class CoarseInit {
   }
 
   // Stage 1's intrinsics fit of every estimating camera, one camera per thread: each fit is
-  // single-threaded (its Ceres solve, for the same bits on any thread count: camera_init.cpp) and
+  // single-threaded (its solve, for the same bits on any thread count: camera_init.cpp) and
   // reads only its own camera's guess and corners, so the cameras can run side by side (EuRoC's
   // two: ~0.65 s each). Their log lines are held and written by InitCamera in the rig's order, as
   // before, and a fit's error is thrown there too, after the checks that precede it.

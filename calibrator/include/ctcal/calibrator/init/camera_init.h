@@ -35,8 +35,9 @@ struct IntrinsicsInitResult {
   int corners = 0;     // corners kept
   int outliers = 0;    // corners dropped as outliers
   // Corners the model could not project at a refinement's start values (behind the camera,
-  // beyond a fisheye's field or the model's domain): left out of that refinement, since Ceres
-  // stops at a start it cannot evaluate; the most over the refinements.
+  // beyond a fisheye's field or the model's domain): left out of that refinement, which rejects
+  // any step that makes a corner unprojectable and so cannot start at one; the most over the
+  // refinements.
   int unprojectable = 0;
   double focal_scale = 1.0;   // closed-form (Zhang) focal factor applied before the refinement
   double rms_px_guess = 0.0;  // RMS reprojection error with the guess (its own PnP poses)
@@ -51,9 +52,10 @@ struct IntrinsicsInitResult {
 //     about the principal point; Zhang's two constraints per view (r1 . r2 = 0, |r1| = |r2|) with
 //     K = diag(k, k, 1) are linear in 1/k^2 and solved over all views;
 //  b. board poses by robust PnP with the rescaled model (stage 2);
-//  c. Ceres refinement of all intrinsics and the board poses with the model's projection and its
-//     analytic Jacobians and a Cauchy loss: projection parameters first (distortion held), then
-//     everything, then once more without the outlier corners. Each refinement leaves out the
+//  c. refinement of all intrinsics and the board poses with the model's projection and its
+//     analytic Jacobians and a Cauchy loss (a Levenberg-Marquardt that eliminates the poses,
+//     calibrator/src/init/intrinsics_refinement.h): projection parameters first (distortion held),
+//     then everything, then once more without the outlier corners. Each refinement leaves out the
 //     corners that the model cannot project at its start values (counted in `unprojectable`).
 // Throws InitError (stage "camera intrinsics") with fewer than min_views usable frames, when
 // the refinement does not converge to a valid model, or when it moves a focal length beyond
