@@ -6,9 +6,7 @@
 
 #include "ctcal/sensors/camera_common.h"
 
-extern "C" {
-#include <mrcal/mrcal.h>
-}
+#include "mrcal_api.h"
 
 namespace ctcal {
 
@@ -33,7 +31,7 @@ bool IsPinholeLike(mrcal_lensmodel_type_t t) {
 
 std::string SupportedNames() {
   std::string out;
-  for (const char* const* n = mrcal_supported_lensmodel_names(); *n; ++n)
+  for (const char* const* n = internal::Mrcal().supported_lensmodel_names(); *n; ++n)
     out += (out.empty() ? "" : ", ") + std::string(*n);
   return out;
 }
@@ -42,10 +40,10 @@ std::string SupportedNames() {
 
 MrcalLens::MrcalLens(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {
   char buffer[256];
-  if (!mrcal_lensmodel_name(buffer, sizeof(buffer), &impl_->lens))
+  if (!internal::Mrcal().lensmodel_name(buffer, sizeof(buffer), &impl_->lens))
     throw std::invalid_argument("mrcal cannot name its lens model");
   name_ = buffer;
-  num_params_ = mrcal_lensmodel_num_params(&impl_->lens);
+  num_params_ = internal::Mrcal().lensmodel_num_params(&impl_->lens);
 }
 
 MrcalLens::~MrcalLens() = default;
@@ -53,9 +51,10 @@ MrcalLens::~MrcalLens() = default;
 std::shared_ptr<const MrcalLens> MrcalLens::FromName(const std::string& lensmodel) {
   auto impl = std::make_unique<Impl>();
   std::memset(&impl->lens, 0, sizeof(impl->lens));
-  if (!mrcal_lensmodel_from_name(&impl->lens, lensmodel.c_str()) ||
+  if (!internal::Mrcal().lensmodel_from_name(&impl->lens, lensmodel.c_str()) ||
       !mrcal_lensmodel_type_is_valid(impl->lens.type)) {
-    if (mrcal_lensmodel_type_is_valid(mrcal_lensmodel_type_from_name(lensmodel.c_str())))
+    if (mrcal_lensmodel_type_is_valid(
+            internal::Mrcal().lensmodel_type_from_name(lensmodel.c_str())))
       throw std::invalid_argument("mrcal lens model '" + lensmodel +
                                   "': missing or unreadable configuration (e.g. "
                                   "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=10_fov_x_deg="
@@ -71,7 +70,7 @@ std::shared_ptr<const MrcalLens> MrcalLens::FromName(const std::string& lensmode
                                   "': a splined model needs order 2 or 3, Nx and Ny >= order + 2 "
                                   "and 0 < fov_x_deg < 360");
     std::vector<double> ux(c.Nx), uy(c.Ny);
-    if (!mrcal_knots_for_splined_models(ux.data(), uy.data(), &impl->lens))
+    if (!internal::Mrcal().knots_for_splined_models(ux.data(), uy.data(), &impl->lens))
       throw std::invalid_argument("mrcal lens model '" + lensmodel + "': no spline knots");
     // A segment of an order-k spline blends k+1 control points; mrcal clamps to the edge segment
     // beyond the inner knots and extrapolates its polynomial. Only the span between the second
@@ -85,7 +84,7 @@ std::shared_ptr<const MrcalLens> MrcalLens::FromName(const std::string& lensmode
 }
 
 bool MrcalLens::HasGradients() const {
-  return mrcal_lensmodel_metadata(&impl_->lens).has_gradients;
+  return internal::Mrcal().lensmodel_metadata(&impl_->lens).has_gradients;
 }
 
 bool MrcalLens::IsSplined() const {
@@ -93,7 +92,7 @@ bool MrcalLens::IsSplined() const {
 }
 
 bool MrcalLens::HasCore() const {
-  return mrcal_lensmodel_metadata(&impl_->lens).has_core;
+  return internal::Mrcal().lensmodel_metadata(&impl_->lens).has_core;
 }
 
 std::vector<std::string> MrcalLens::ParamNames() const {
@@ -154,8 +153,9 @@ bool MrcalLens::Project(const double* params, const Eigen::Vector3d& p_C, Eigen:
   // mrcal writes dq/dintrinsics as a dense row-major (2, N) array; Eigen's 2 x N matrix is
   // column-major, so mrcal fills a scratch row-major buffer.
   std::vector<double> dq_dintrinsics(J_uv_params ? 2 * static_cast<std::size_t>(num_params_) : 0);
-  if (!mrcal_project(&q, J_uv_p ? dq_dp : nullptr, J_uv_params ? dq_dintrinsics.data() : nullptr,
-                     &p, 1, &impl_->lens, params))
+  if (!internal::Mrcal().project(&q, J_uv_p ? dq_dp : nullptr,
+                                 J_uv_params ? dq_dintrinsics.data() : nullptr, &p, 1, &impl_->lens,
+                                 params))
     return false;
   *uv = Eigen::Vector2d(q.x, q.y);
   if (!uv->allFinite())
@@ -181,7 +181,7 @@ bool MrcalLens::Unproject(const double* params, const Eigen::Vector2d& uv,
     return false;
   mrcal_point2_t q = {{uv.x(), uv.y()}};
   mrcal_point3_t v;
-  if (!mrcal_unproject(&v, &q, 1, &impl_->lens, params))
+  if (!internal::Mrcal().unproject(&v, &q, 1, &impl_->lens, params))
     return false;
   const Eigen::Vector3d ray(v.x, v.y, v.z);
   if (!ray.allFinite() || ray.norm() == 0.0)
