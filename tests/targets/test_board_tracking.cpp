@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <vector>
 
@@ -235,19 +236,41 @@ TEST(BoardTracking, DetectFilesSameOnOneAndTwoThreads) {
   const std::vector<DetectionResult> a = Detector(board, options).DetectFiles(paths);
   options.threads = 2;
   const std::vector<DetectionResult> b = Detector(board, options).DetectFiles(paths);
+  // Three workers on four chunks: one is left without a chunk early and reads files ahead of
+  // the others' trackers.
+  options.threads = 3;
+  const std::vector<DetectionResult> c = Detector(board, options).DetectFiles(paths);
+  // An unreadable file inside a chunk that is read ahead: the same error and tracker reset.
+  { std::ofstream(paths[17], std::ios::trunc) << "not a PNG"; }
+  options.threads = 1;
+  const std::vector<DetectionResult> broken_a = Detector(board, options).DetectFiles(paths);
+  options.threads = 3;
+  const std::vector<DetectionResult> broken_c = Detector(board, options).DetectFiles(paths);
   options.track = false;
+  ASSERT_TRUE(cv::imwrite(paths[17], s.images[17]));
   const std::vector<DetectionResult> untracked = Detector(board, options).DetectFiles(paths);
   fs::remove_all(dir);
-  ASSERT_EQ(a.size(), b.size());
-  for (size_t k = 0; k < a.size(); ++k) {
-    ASSERT_EQ(a[k].corners.size(), b[k].corners.size()) << "frame " << k;
-    for (size_t i = 0; i < a[k].corners.size(); ++i) {
-      EXPECT_EQ(a[k].corners[i].id, b[k].corners[i].id);
-      EXPECT_EQ(a[k].corners[i].uv, b[k].corners[i].uv) << "frame " << k;
-      EXPECT_EQ(a[k].corners[i].sigma, b[k].corners[i].sigma) << "frame " << k;
+  const auto expect_same = [](const std::vector<DetectionResult>& x,
+                              const std::vector<DetectionResult>& y, const std::string& what) {
+    ASSERT_EQ(x.size(), y.size()) << what;
+    for (size_t k = 0; k < x.size(); ++k) {
+      ASSERT_EQ(x[k].corners.size(), y[k].corners.size()) << what << " frame " << k;
+      EXPECT_EQ(x[k].error, y[k].error) << what << " frame " << k;
+      for (size_t i = 0; i < x[k].corners.size(); ++i) {
+        EXPECT_EQ(x[k].corners[i].id, y[k].corners[i].id);
+        EXPECT_EQ(x[k].corners[i].uv, y[k].corners[i].uv) << what << " frame " << k;
+        EXPECT_EQ(x[k].corners[i].sigma, y[k].corners[i].sigma) << what << " frame " << k;
+      }
     }
+  };
+  expect_same(a, b, "2 threads");
+  expect_same(a, c, "3 threads");
+  expect_same(broken_a, broken_c, "an unreadable file, 3 threads");
+  for (size_t k = 0; k < a.size(); ++k)
     EXPECT_EQ(a[k].image_width, 752);
-  }
+  EXPECT_NE(broken_c[17].error.find(paths[17]), std::string::npos) << broken_c[17].error;
+  EXPECT_TRUE(broken_c[17].corners.empty());
+  EXPECT_TRUE(broken_c[18].board_found);  // the next frame starts the tracker again
   const Errors tracked = Compare(board, s, a);
   const Errors full = Compare(board, s, untracked);
   EXPECT_LE(tracked.rms, 0.06);
