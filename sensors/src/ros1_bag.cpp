@@ -187,8 +187,9 @@ class Ros1BagReader : public RosBagReader {
 
 }  // namespace
 
-std::unique_ptr<RosBagReader> OpenRos1Bag(const std::string& path) {
-  return std::make_unique<Ros1BagReader>(path);
-}
-
 }  // namespace ctcal
+
+// The module's reader entry point (ros1_module.h).
+extern "C" ctcal::RosBagReader* ctcal_ros1_open_bag(const std::string& path) {
+  return new ctcal::Ros1BagReader(path);
+}

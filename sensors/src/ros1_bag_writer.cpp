@@ -1,9 +1,14 @@
-// Ros1BagWriter: librosbag_storage's writer takes a message type with ROS's traits; RawMessage is
-// one whose bytes are already serialized, its type, md5sum and definition given per message (as
-// librosbag's own MessageInstance does when it copies a message from bag to bag).
+// The ROS1 bag writer of the ROS1 module (ros1_module.h): librosbag_storage's writer takes a
+// message type with ROS's traits; RawMessage is one whose bytes are already serialized, its type,
+// md5sum and definition given per message (as librosbag's own MessageInstance does when it copies a
+// message from bag to bag).
 #include <rosbag/bag.h>
 
+#include <cstdint>
+#include <map>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "ctcal/sensors/ros_bag.h"
 
@@ -101,61 +106,74 @@ struct Serializer<ctcal::RawMessage> {
 }  // namespace ros::serialization
 
 namespace ctcal {
+namespace {
 
-struct Ros1BagWriter::Impl {
-  std::string path;
-  rosbag::Bag bag;
-  std::map<std::string, TypeInfo> types;
-  bool open = false;
+class Ros1Writer {
+ public:
+  Ros1Writer(const std::string& path, RosBagCompression compression) : path_(path) {
+    try {
+      bag_.open(path, rosbag::bagmode::Write);
+      bag_.setCompression(compression == RosBagCompression::kBz2 ? rosbag::compression::BZ2
+                          : compression == RosBagCompression::kLz4
+                              ? rosbag::compression::LZ4
+                              : rosbag::compression::Uncompressed);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(path + ": " + e.what());
+    }
+    open_ = true;
+  }
+
+  void Write(const std::string& topic, const std::string& type, std::int64_t t_ns,
+             const std::vector<std::uint8_t>& bytes) {
+    auto it = types_.find(type);
+    if (it == types_.end())
+      it = types_.emplace(type, InfoOf(type)).first;
+    RawMessage m{&bytes, it->first.c_str(), it->second.md5sum, it->second.definition.c_str()};
+    ros::Time time;
+    time.fromNSec(static_cast<std::uint64_t>(t_ns));
+    try {
+      bag_.write(topic, time, m);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(path_ + ": topic '" + topic + "': " + e.what());
+    }
+  }
+
+  void Close() {
+    if (!open_)
+      return;
+    open_ = false;
+    try {
+      bag_.close();
+    } catch (const std::exception& e) {
+      throw std::runtime_error(path_ + ": " + e.what());
+    }
+  }
+
+ private:
+  std::string path_;
+  rosbag::Bag bag_;
+  std::map<std::string, TypeInfo> types_;
+  bool open_ = false;
 };
 
-Ros1BagWriter::Ros1BagWriter(const std::string& path, RosBagCompression compression)
-    : impl_(std::make_unique<Impl>()) {
-  impl_->path = path;
-  try {
-    impl_->bag.open(path, rosbag::bagmode::Write);
-    impl_->bag.setCompression(compression == RosBagCompression::kBz2 ? rosbag::compression::BZ2
-                              : compression == RosBagCompression::kLz4
-                                  ? rosbag::compression::LZ4
-                                  : rosbag::compression::Uncompressed);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
-  impl_->open = true;
-}
-
-Ros1BagWriter::~Ros1BagWriter() {
-  try {
-    Close();
-  } catch (const std::exception&) {
-    // Close() reports it when called; a destructor cannot.
-  }
-}
-
-void Ros1BagWriter::Write(const std::string& topic, const std::string& type, std::int64_t t_ns,
-                          const std::vector<std::uint8_t>& bytes) {
-  auto it = impl_->types.find(type);
-  if (it == impl_->types.end())
-    it = impl_->types.emplace(type, InfoOf(type)).first;
-  RawMessage m{&bytes, it->first.c_str(), it->second.md5sum, it->second.definition.c_str()};
-  ros::Time time;
-  time.fromNSec(static_cast<std::uint64_t>(t_ns));
-  try {
-    impl_->bag.write(topic, time, m);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(impl_->path + ": topic '" + topic + "': " + e.what());
-  }
-}
-
-void Ros1BagWriter::Close() {
-  if (!impl_ || !impl_->open)
-    return;
-  impl_->open = false;
-  try {
-    impl_->bag.close();
-  } catch (const std::exception& e) {
-    throw std::runtime_error(impl_->path + ": " + e.what());
-  }
-}
-
+}  // namespace
 }  // namespace ctcal
+
+// The module's writer entry points (ros1_module.h); the handle is a Ros1Writer.
+extern "C" void* ctcal_ros1_writer_open(const std::string& path, int compression) {
+  return new ctcal::Ros1Writer(path, static_cast<ctcal::RosBagCompression>(compression));
+}
+
+extern "C" void ctcal_ros1_writer_write(void* writer, const std::string& topic,
+                                        const std::string& type, std::int64_t t_ns,
+                                        const std::vector<std::uint8_t>& bytes) {
+  static_cast<ctcal::Ros1Writer*>(writer)->Write(topic, type, t_ns, bytes);
+}
+
+extern "C" void ctcal_ros1_writer_close(void* writer) {
+  static_cast<ctcal::Ros1Writer*>(writer)->Close();
+}
+
+extern "C" void ctcal_ros1_writer_free(void* writer) {
+  delete static_cast<ctcal::Ros1Writer*>(writer);
+}
