@@ -212,10 +212,9 @@ IntrinsicsRefinementSummary Refine(Eigen::VectorXd* params_io, const Eigen::Vect
   typename R::VecP dp;
   std::vector<typename R::Vec6> dv;
   std::vector<ViewState> candidate_views(views->size());
-  bool done = free == 0 && views->empty();
-  if (refinement.GradientMaxNorm() <= kGradientTolerance)
-    done = true;
-  while (!done && summary.iterations < options.max_iterations) {
+  // Already at a stationary point (Ceres' gradient tolerance at the start).
+  const bool stationary = refinement.GradientMaxNorm() <= kGradientTolerance;
+  while (!stationary && summary.iterations < options.max_iterations) {
     ++summary.iterations;
     double model_decrease = 0.0;
     if (!refinement.Step(radius, &dp, &dv, &model_decrease) || !(model_decrease > 0.0)) {
