@@ -1,5 +1,7 @@
 #include "intrinsics_refinement.h"
 
+#include <ceres/manifold.h>
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -23,27 +25,6 @@ constexpr double kParameterTolerance = 1e-8;
 constexpr double kGradientTolerance = 1e-10;
 constexpr int kMaxConsecutiveInvalidSteps = 5;
 
-// Ceres' EigenQuaternionManifold (coefficients x, y, z, w): Plus(q, d) = [sin|d| d/|d|, cos|d|] q
-// and its Jacobian at d = 0, the 4 x 3 matrix that maps ambient derivatives to the tangent.
-Eigen::Quaterniond QuaternionPlus(const Eigen::Quaterniond& q, const Eigen::Vector3d& d) {
-  const double norm = d.norm();
-  if (norm == 0.0)
-    return q;
-  const double s = std::sin(norm) / norm;
-  const Eigen::Quaterniond delta(std::cos(norm), s * d.x(), s * d.y(), s * d.z());
-  return delta * q;
-}
-
-Eigen::Matrix<double, 4, 3> QuaternionPlusJacobian(const Eigen::Quaterniond& q) {
-  const double x = q.x(), y = q.y(), z = q.z(), w = q.w();
-  Eigen::Matrix<double, 4, 3> J;
-  J << w, z, -y,  //
-      -z, w, x,   //
-      y, -x, w,   //
-      -x, -y, -z;
-  return J;
-}
-
 template <class Model>
 class Refinement {
  public:
@@ -58,6 +39,7 @@ class Refinement {
   Refinement(const std::vector<CornerRef>& corners, std::size_t num_views, double cauchy_px,
              int free_params)
       : corners_(corners), free_(free_params), b_(cauchy_px * cauchy_px), c_(1.0 / b_) {
+    plus_jacobians_.resize(num_views);
     C_.resize(num_views);
     B_.resize(num_views);
     gv_.resize(num_views);
@@ -73,7 +55,7 @@ class Refinement {
       if (!Residual::Compute(params.data(), v.q_C_W, v.t_C_W, c.p_W, c.uv, r.data(), nullptr,
                              nullptr, nullptr))
         return false;
-      sum += b_ * std::log(1.0 + r.squaredNorm() * c_);
+      sum += Rho(r.squaredNorm());
     }
     *cost = 0.5 * sum;
     return true;
@@ -84,6 +66,7 @@ class Refinement {
     A_.setZero();
     gp_.setZero();
     for (std::size_t v = 0; v < views.size(); ++v) {
+      kQuaternion.PlusJacobian(views[v].q_C_W.coeffs().data(), plus_jacobians_[v].data());
       C_[v].setZero();
       B_[v].setZero();
       gv_[v].setZero();
@@ -102,10 +85,10 @@ class Refinement {
                              J_params.data(), J_q.data(), J_t.data()))
         return false;
       const double s = r.squaredNorm();
-      sum += b_ * std::log(1.0 + s * c_);
+      sum += Rho(s);
       // rho'(s): the corrector's sqrt(rho') on residual and Jacobian, squared.
       const double w = 1.0 / (1.0 + s * c_);
-      J_pose.leftCols<3>() = J_q * QuaternionPlusJacobian(view.q_C_W);
+      J_pose.leftCols<3>() = J_q * plus_jacobians_[v];
       J_pose.rightCols<3>() = J_t;
       const Eigen::Matrix<double, P, 2> wJp = w * J_params.transpose();
       const Eigen::Matrix<double, 6, 2> wJv = w * J_pose.transpose();
@@ -118,6 +101,13 @@ class Refinement {
     *cost = 0.5 * sum;
     return true;
   }
+
+  // The Cauchy loss rho(s) = a^2 log(1 + s / a^2) of a corner's squared error s.
+  double Rho(double s) const { return b_ * std::log(1.0 + s * c_); }
+
+  // Ceres' quaternion manifold (coefficients x, y, z, w), which the refinement used there:
+  // Plus(q, d) = [sin|d| d/|d|, cos|d|] q.
+  static inline const ceres::EigenQuaternionManifold kQuaternion{};
 
   double GradientMaxNorm() const {
     double m = 0.0;
@@ -183,6 +173,8 @@ class Refinement {
   const std::vector<CornerRef>& corners_;
   int free_;
   double b_, c_;  // Cauchy: a^2 and 1 / a^2 of scale a
+  // Each view's PlusJacobian (4 x 3, row-major) at the linearisation point.
+  std::vector<Eigen::Matrix<double, 4, 3, Eigen::RowMajor>> plus_jacobians_;
   MatP A_;
   VecP gp_;
   std::vector<Mat6> C_;
@@ -242,7 +234,8 @@ IntrinsicsRefinementSummary Refine(Eigen::VectorXd* params_io, const Eigen::Vect
     for (int i = 0; i < P; ++i)
       x_new[i] = std::min(std::max(x_new[i], lower[i]), upper[i]);
     for (std::size_t v = 0; v < views->size(); ++v) {
-      candidate_views[v].q_C_W = QuaternionPlus((*views)[v].q_C_W, dv[v].template head<3>());
+      R::kQuaternion.Plus((*views)[v].q_C_W.coeffs().data(), dv[v].data(),
+                          candidate_views[v].q_C_W.coeffs().data());
       candidate_views[v].t_C_W = (*views)[v].t_C_W + dv[v].template tail<3>();
     }
     double new_cost = std::numeric_limits<double>::max();
