@@ -1,9 +1,9 @@
 #include "mrcal_api.h"
 
-#include <dlfcn.h>
-
 #include <stdexcept>
 #include <string>
+
+#include "loaded_library.h"
 
 #ifndef CTCAL_MRCAL_SONAME
 #error "CTCAL_MRCAL_SONAME (libmrcal's soname) is set by cmake/CtcalDependencies.cmake"
@@ -13,20 +13,6 @@ namespace ctcal::internal {
 
 namespace {
 
-std::string LoaderError() {
-  const char* e = dlerror();
-  return e != nullptr ? e : "unknown error";
-}
-
-template <typename F>
-void Resolve(void* library, const char* name, F* f) {
-  void* symbol = dlsym(library, name);
-  if (symbol == nullptr)
-    throw std::runtime_error(std::string("libmrcal (") + CTCAL_MRCAL_SONAME + ") has no " + name +
-                             ": " + LoaderError());
-  *f = reinterpret_cast<F>(symbol);
-}
-
 MrcalApi Load() {
   // RTLD_LOCAL: its symbols stay out of the global namespace (only dlsym finds them); never
   // closed, the functions are used until the process ends.
@@ -35,16 +21,18 @@ MrcalApi Load() {
     throw std::runtime_error(std::string("mrcal lens models need libmrcal (") + CTCAL_MRCAL_SONAME +
                              "), which cannot be loaded: " + LoaderError() +
                              " (install Debian's libmrcal: scripts/install_deps.sh)");
+  const std::string owner = std::string("libmrcal (") + CTCAL_MRCAL_SONAME + ")";
   MrcalApi api{};
-  Resolve(library, "mrcal_supported_lensmodel_names", &api.supported_lensmodel_names);
-  Resolve(library, "mrcal_lensmodel_name", &api.lensmodel_name);
-  Resolve(library, "mrcal_lensmodel_num_params", &api.lensmodel_num_params);
-  Resolve(library, "mrcal_lensmodel_from_name", &api.lensmodel_from_name);
-  Resolve(library, "mrcal_lensmodel_type_from_name", &api.lensmodel_type_from_name);
-  Resolve(library, "mrcal_knots_for_splined_models", &api.knots_for_splined_models);
-  Resolve(library, "mrcal_lensmodel_metadata", &api.lensmodel_metadata);
-  Resolve(library, "mrcal_project", &api.project);
-  Resolve(library, "mrcal_unproject", &api.unproject);
+  ResolveFunction(library, owner, "mrcal_supported_lensmodel_names",
+                  &api.supported_lensmodel_names);
+  ResolveFunction(library, owner, "mrcal_lensmodel_name", &api.lensmodel_name);
+  ResolveFunction(library, owner, "mrcal_lensmodel_num_params", &api.lensmodel_num_params);
+  ResolveFunction(library, owner, "mrcal_lensmodel_from_name", &api.lensmodel_from_name);
+  ResolveFunction(library, owner, "mrcal_lensmodel_type_from_name", &api.lensmodel_type_from_name);
+  ResolveFunction(library, owner, "mrcal_knots_for_splined_models", &api.knots_for_splined_models);
+  ResolveFunction(library, owner, "mrcal_lensmodel_metadata", &api.lensmodel_metadata);
+  ResolveFunction(library, owner, "mrcal_project", &api.project);
+  ResolveFunction(library, owner, "mrcal_unproject", &api.unproject);
   return api;
 }
 

@@ -7,9 +7,6 @@
 // twice for `calibrate` (it re-executes itself for the huge-page heap), whether or not the data
 // is a bag. The module is found where the build put it (CTCAL_ROS1_MODULE), else next to the
 // running program.
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <cstdint>
 #include <filesystem>
 #include <stdexcept>
@@ -17,6 +14,7 @@
 #include <vector>
 
 #include "ctcal/sensors/ros_bag.h"
+#include "loaded_library.h"
 
 #ifndef CTCAL_ROS1_MODULE
 #error "CTCAL_ROS1_MODULE (the ROS1 module's path) is set by sensors/CMakeLists.txt"
@@ -34,20 +32,6 @@ struct Ros1Module {
   void (*writer_close)(void* writer);
   void (*writer_free)(void* writer);
 };
-
-std::string LoaderError() {
-  const char* e = dlerror();
-  return e != nullptr ? e : "unknown error";
-}
-
-template <typename F>
-void Resolve(void* module, const std::string& path, const char* name, F* f) {
-  void* symbol = dlsym(module, name);
-  if (symbol == nullptr)
-    throw std::runtime_error("the ROS1 bag module " + path + " has no " + name + ": " +
-                             LoaderError());
-  *f = reinterpret_cast<F>(symbol);
-}
 
 Ros1Module Load() {
   namespace fs = std::filesystem;
@@ -71,17 +55,18 @@ Ros1Module Load() {
       path = candidate;
       break;
     }
-    tried += (tried.empty() ? "" : ", ") + candidate + " (" + LoaderError() + ")";
+    tried += (tried.empty() ? "" : ", ") + candidate + " (" + internal::LoaderError() + ")";
   }
   if (module == nullptr)
     throw std::runtime_error("ROS1 bags need ctcal's ROS1 module, which cannot be loaded: " +
                              tried + " (build it with the program: make)");
+  const std::string owner = "the ROS1 bag module " + path;
   Ros1Module m{};
-  Resolve(module, path, "ctcal_ros1_open_bag", &m.open_bag);
-  Resolve(module, path, "ctcal_ros1_writer_open", &m.writer_open);
-  Resolve(module, path, "ctcal_ros1_writer_write", &m.writer_write);
-  Resolve(module, path, "ctcal_ros1_writer_close", &m.writer_close);
-  Resolve(module, path, "ctcal_ros1_writer_free", &m.writer_free);
+  internal::ResolveFunction(module, owner, "ctcal_ros1_open_bag", &m.open_bag);
+  internal::ResolveFunction(module, owner, "ctcal_ros1_writer_open", &m.writer_open);
+  internal::ResolveFunction(module, owner, "ctcal_ros1_writer_write", &m.writer_write);
+  internal::ResolveFunction(module, owner, "ctcal_ros1_writer_close", &m.writer_close);
+  internal::ResolveFunction(module, owner, "ctcal_ros1_writer_free", &m.writer_free);
   return m;
 }
 
