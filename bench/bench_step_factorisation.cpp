@@ -93,7 +93,8 @@ void BM_Eigen(benchmark::State& state) {
 
 // range(0): knots; range(1): 0 EuRoC-shaped, 1 demo-shaped, 2 and 3 denser bias blocks (80 and
 // 135 flops per entry of L: where the supernodal factorisation starts to pay); range(2):
-// SparseCholesky::Kind (0 auto, 1 simplicial, 2 supernodal).
+// SparseCholesky::Kind (0 auto, 1 simplicial, 2 supernodal); range(3): its threads (2: the split
+// factor where it pays).
 void BM_SparseCholesky(benchmark::State& state) {
   const int knots = static_cast<int>(state.range(0));
   const SparseColMajor H = state.range(1) == 0   ? EurocShapedNormalEquations(knots)
@@ -103,6 +104,7 @@ void BM_SparseCholesky(benchmark::State& state) {
   const Eigen::MatrixXd B = RightHandSides(H.rows());
   const Eigen::VectorXd d = Eigen::VectorXd::Constant(H.rows(), 1e-8);
   ctcal::SparseCholesky chol(static_cast<ctcal::SparseCholesky::Kind>(state.range(2)));
+  chol.SetThreads(static_cast<int>(state.range(3)));
   Eigen::MatrixXd X;
   for (auto _ : state) {
     chol.Factorize(H, d);
@@ -111,6 +113,7 @@ void BM_SparseCholesky(benchmark::State& state) {
     benchmark::DoNotOptimize(X.data());
   }
   state.counters["supernodal"] = chol.Supernodal() ? 1.0 : 0.0;
+  state.counters["split"] = chol.Split() ? 1.0 : 0.0;
   state.counters["nnz_L"] = chol.FactorNonZeros();
   state.counters["flops_per_entry"] = chol.FactorFlops() / chol.FactorNonZeros();
 }
@@ -165,8 +168,10 @@ BENCHMARK(BM_BorderSchur)
 BENCHMARK(BM_Eigen)->Arg(5115)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_AnalyseAndFactorize)->Args({5115, 0})->Args({2062, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SparseCholesky)
-    ->ArgsProduct({{5115}, {0}, {0, 1, 2}})
-    ->ArgsProduct({{2062}, {1, 2, 3}, {0, 1, 2}})
+    ->ArgsProduct({{5115}, {0}, {0, 1, 2}, {1}})
+    ->ArgsProduct({{5115}, {0}, {0}, {2}})
+    ->ArgsProduct({{2062}, {1, 2, 3}, {0, 1, 2}, {1}})
+    ->ArgsProduct({{2062}, {1, 2}, {0}, {2}})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -554,6 +554,7 @@ bool LevenbergMarquardt::Impl::SolveStep(double radius, Eigen::VectorXd* step) {
     if (llt_ == nullptr)
       llt_ = shared_ != nullptr ? std::shared_ptr<SparseCholesky>(shared_, &shared_->chol)
                                 : std::make_shared<SparseCholesky>();
+    llt_->SetThreads(threads_);
     // A_nn = H_nn + D's first n; H_nn's pattern is fixed from the solve's first factorisation on.
     const bool factored = llt_->Factorize(H_->H_nn(), D, pattern_analysed_);
     pattern_analysed_ = true;

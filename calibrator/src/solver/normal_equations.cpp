@@ -382,6 +382,7 @@ Eigen::MatrixXd MarginalizeNuisance(NormalEquations* normal, double* nuisance_da
   for (int i = 0; i < m; ++i)
     max_diag = std::max(max_diag, H_nn.valuePtr()[H_nn.outerIndexPtr()[i]]);
   SparseCholesky local;
+  local.SetThreads(threads);
   SparseCholesky& llt = factorisation != nullptr ? *factorisation : local;
   // A failed attempt is handled (and reported) by the damping below.
   bool factored = llt.Factorize(H_nn, Eigen::VectorXd::Zero(m));

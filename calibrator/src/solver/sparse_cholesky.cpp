@@ -2,73 +2,14 @@
 
 #include <cholmod.h>
 
+#include "sparse_cholesky_impl.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
 namespace ctcal {
-namespace {
-
-// A cholmod_sparse header over compressed columns held elsewhere (nothing is copied): one
-// triangle of a symmetric matrix, the lower (upper = false) or the upper.
-cholmod_sparse View(int n, const int* col_start, const int* row_index, const double* values,
-                    bool sorted, bool upper = false) {
-  cholmod_sparse s{};
-  s.nrow = s.ncol = static_cast<std::size_t>(n);
-  s.nzmax = static_cast<std::size_t>(col_start[n]);
-  s.p = const_cast<int*>(col_start);
-  s.i = const_cast<int*>(row_index);
-  s.x = const_cast<double*>(values);
-  s.stype = upper ? 1 : -1;
-  s.itype = CHOLMOD_INT;
-  s.xtype = CHOLMOD_REAL;
-  s.dtype = CHOLMOD_DOUBLE;
-  s.sorted = sorted ? 1 : 0;
-  s.packed = 1;
-  return s;
-}
-
-// A cholmod_dense header over n x k column-major doubles held elsewhere.
-cholmod_dense DenseView(double* x, std::size_t n, std::size_t k) {
-  cholmod_dense b{};
-  b.nrow = n;
-  b.ncol = k;
-  b.nzmax = n * k;
-  b.d = n;
-  b.x = x;
-  b.xtype = CHOLMOD_REAL;
-  b.dtype = CHOLMOD_DOUBLE;
-  return b;
-}
-
-}  // namespace
-
-struct SparseCholesky::Workspace::Impl {
-  Impl() {
-    cholmod_start(&common);
-    common.print = 0;
-  }
-  ~Impl() {
-    Release();
-    cholmod_finish(&common);
-  }
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-  void Release() {
-    cholmod_free_dense(&x, &common);
-    cholmod_free_dense(&y, &common);
-    cholmod_free_dense(&e, &common);
-    std::vector<double>().swap(rhs);
-  }
-
-  // Its own: cholmod_solve2 allocates through it and counts into it.
-  cholmod_common common;
-  cholmod_dense* x = nullptr;  // cholmod_solve2's result and workspaces, kept between solves
-  cholmod_dense* y = nullptr;
-  cholmod_dense* e = nullptr;
-  std::vector<double> rhs;  // B in the new order, column-major
-};
 
 SparseCholesky::Workspace::Workspace() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::Workspace::~Workspace() = default;
@@ -76,104 +17,91 @@ void SparseCholesky::Workspace::Release() {
   impl_->Release();
 }
 
-struct SparseCholesky::Impl {
-  explicit Impl(Kind kind) : kind_(kind) {
-    cholmod_start(&common_);
-    common_.print = 0;  // a failure is an invalid step, handled by the caller
-  }
-  ~Impl() {
-    cholmod_free_factor(&factor_, &common_);
-    cholmod_finish(&common_);
-  }
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-
-  void Analyze(const SparseColMajor& lower);
-  void StoreUpper();
-  bool SameAsAnalysed(const SparseColMajor& lower) const;
-  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
-  bool Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace::Impl* w) const;
-  bool HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
-                 Eigen::Ref<Eigen::MatrixXd> X, Workspace::Impl* w) const;
-  bool HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
-                     Workspace::Impl* w) const;
-  // CHOLMOD's result in w.x (the factor's order, `cols` columns) back in A's order, in *X; false
-  // when it is not finite.
-  bool Unpermuted(const Workspace::Impl& w, Eigen::Index cols, Eigen::MatrixXd* X) const;
-  // B's columns (then `last`'s) permuted into w->rhs and handed to CHOLMOD as `b`.
-  cholmod_dense PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
-                            Workspace::Impl* w) const;
-
-  Kind kind_;
-  cholmod_common common_;
-  cholmod_factor* factor_ = nullptr;
-  std::vector<int> perm_;  // new index -> H_nn's index (CHOLMOD's ordering)
-  // tril(P A P^T) in compressed columns, or triu(P A P^T) (upper_: a simplicial factor's, see
-  // StoreUpper); entry k of H_nn's lower triangle lands at target_[k].
-  std::vector<int> col_start_, row_index_, target_;
-  bool upper_ = false;
-  std::vector<double> values_;
-  // D^-1/2 of a simplicial LDL^T factor, in the factor's order (HalfSolve); empty for LL^T.
-  std::vector<double> half_scale_;
-  Workspace solve_;  // of Solve(B, X)
-};
+SparseCholesky::Impl::Impl(Kind kind_in) : kind(kind_in), single(kind_in) {}
+SparseCholesky::Impl::~Impl() = default;
 
 SparseCholesky::SparseCholesky(Kind kind) : impl_(std::make_unique<Impl>(kind)) {}
 SparseCholesky::~SparseCholesky() = default;
 
+void SparseCholesky::SetThreads(int threads) {
+  impl_->threads = threads;
+}
+
 bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
                                bool same_pattern) {
-  return impl_->Factorize(lower, d, same_pattern);
+  Impl& m = *impl_;
+  // A new pattern is analysed anew: split where that pays on two threads, else one factor.
+  if (!m.analysed || (!same_pattern && (m.split != nullptr ? !m.split->SameAsAnalysed(lower)
+                                                           : !m.single.SameAsAnalysed(lower)))) {
+    m.split.reset();
+    cholmod_free_factor(&m.single.factor_, &m.single.common_);
+    if (m.kind == Kind::kAuto && m.threads >= 2)
+      m.split = SplitFactor::Analyze(lower);
+    m.analysed = true;
+  }
+  if (m.split != nullptr)
+    return m.split->Factorize(lower, d);
+  return m.single.Factorize(lower, d, true);
 }
 
 void SparseCholesky::ReleaseNumeric() {
+  impl_->factor().ReleaseNumeric();
+}
+
+void SingleFactor::ReleaseNumeric() {
   // A numeric factor back to its symbolic analysis, supernodal or simplicial as it is
   // (cholmod_change_factor keeps the supernodes or the column counts and frees the values); the
   // next factorize allocates them again.
-  cholmod_factor* L = impl_->factor_;
-  if (L != nullptr && L->xtype != CHOLMOD_PATTERN)
-    cholmod_change_factor(CHOLMOD_PATTERN, L->is_ll, L->is_super, 1, 1, L, &impl_->common_);
-  std::vector<double>().swap(impl_->values_);
-  impl_->solve_.Release();
+  if (factor_ != nullptr && factor_->xtype != CHOLMOD_PATTERN)
+    cholmod_change_factor(CHOLMOD_PATTERN, factor_->is_ll, factor_->is_super, 1, 1, factor_,
+                          &common_);
+  std::vector<double>().swap(values_);
+  solve_.Release();
 }
 
 double SparseCholesky::FactorNonZeros() const {
-  return impl_->factor_ == nullptr ? 0.0 : impl_->common_.lnz;
+  return impl_->factor().NonZeros();
 }
 
 double SparseCholesky::FactorFlops() const {
-  return impl_->factor_ == nullptr ? 0.0 : impl_->common_.fl;
+  return impl_->factor().Flops();
 }
 
 bool SparseCholesky::Supernodal() const {
-  return impl_->factor_ != nullptr && impl_->factor_->is_super;
+  return impl_->split == nullptr && impl_->single.factor_ != nullptr &&
+         impl_->single.factor_->is_super;
+}
+
+bool SparseCholesky::Split() const {
+  return impl_->split != nullptr;
 }
 
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X) {
-  return impl_->Solve(B, X, impl_->solve_.impl_.get());
+  Factor& f = impl_->factor();
+  return f.Solve(B, X, f.solve_.impl_.get());
 }
 
 bool SparseCholesky::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
                            Workspace* workspace) const {
-  return impl_->Solve(B, X, workspace->impl_.get());
+  return impl_->factor().Solve(B, X, workspace->impl_.get());
 }
 
 bool SparseCholesky::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
                                const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
                                Workspace* workspace) const {
-  return impl_->HalfSolve(B, last, X, workspace->impl_.get());
+  return impl_->factor().HalfSolve(B, last, X, workspace->impl_.get());
 }
 
 bool SparseCholesky::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
                                    Workspace* workspace) const {
-  return impl_->HalfSolveBack(X, Y, workspace->impl_.get());
+  return impl_->factor().HalfSolveBack(X, Y, workspace->impl_.get());
 }
 
 void SparseCholesky::ReleaseSolveWorkspace() {
-  impl_->solve_.Release();
+  impl_->factor().solve_.Release();
 }
 
-void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
+void SingleFactor::Analyze(const SparseColMajor& lower, const std::vector<int>& last_set) {
   if (!lower.isCompressed())
     throw std::logic_error("SparseCholesky: the matrix must be in compressed form");
   const int n = static_cast<int>(lower.cols());
@@ -192,7 +120,25 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   {
     const cholmod_sparse a = View(n, p, rows, lower.valuePtr(), false);
     perm_.resize(static_cast<std::size_t>(n));
-    if (!cholmod_amd(const_cast<cholmod_sparse*>(&a), nullptr, 0, perm_.data(), &common_))
+    // With a last set (SplitFactor's rows coupled to its separator), CAMD: AMD's order within
+    // each constraint set, set 0 before set 1.
+    std::vector<int> member;
+    if (split_half_) {
+      // AMD orders columns denser than 10 sqrt(n) last, as a block; a half's bias knots (~1700
+      // entries: a second of trajectory knots) crossed that with half the columns, and the half
+      // then filled ~2.3x the whole: only completely dense ones so.
+      common_.method[0].prune_dense = -1.0;
+    }
+    if (!last_set.empty()) {
+      member.assign(static_cast<std::size_t>(n), 0);
+      for (const int j : last_set)
+        member[static_cast<std::size_t>(j)] = 1;
+    }
+    const bool ordered = member.empty() ? cholmod_amd(const_cast<cholmod_sparse*>(&a), nullptr, 0,
+                                                      perm_.data(), &common_)
+                                        : cholmod_camd(const_cast<cholmod_sparse*>(&a), nullptr, 0,
+                                                       member.data(), perm_.data(), &common_);
+    if (!ordered)
       throw std::runtime_error("SparseCholesky: CHOLMOD could not order the normal equations");
   }
   std::vector<int> position(static_cast<std::size_t>(n));  // H_nn's index -> new index
@@ -264,7 +210,7 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
   common_.supernodal = kind_ == Kind::kSimplicial   ? CHOLMOD_SIMPLICIAL
                        : kind_ == Kind::kSupernodal ? CHOLMOD_SUPERNODAL
                                                     : CHOLMOD_AUTO;
-  common_.supernodal_switch = kSupernodalSwitch;
+  common_.supernodal_switch = SparseCholesky::kSupernodalSwitch;
   common_.final_asis = 1;
   // A simplicial factor's columns exactly as long as their counts: they never grow here (no
   // updates), and CHOLMOD's default slack (20 % and 5 entries a column) was memory for nothing.
@@ -286,7 +232,7 @@ void SparseCholesky::Impl::Analyze(const SparseColMajor& lower) {
 // transpose every time (cholmod_transpose_sym: 3 % of EuRoC's CPU and 16 % of its page faults).
 // Once per analysis: column c's entries (r >= c) become row c of their columns r, appended in
 // ascending c, so each new column's rows come out sorted.
-void SparseCholesky::Impl::StoreUpper() {
+void SingleFactor::StoreUpper() {
   const std::size_t n = col_start_.size() - 1, nnz = row_index_.size();
   std::vector<int> start(n + 1, 0);
   for (const int r : row_index_)
@@ -313,7 +259,7 @@ void SparseCholesky::Impl::StoreUpper() {
 // Whether `lower` has the analysed pattern: every entry's map target holds its permuted row and
 // lies in its permuted column (the map is one to one on the analysed pattern, so an equal count
 // and every entry in place is the same pattern), without a copy of the pattern kept for it.
-bool SparseCholesky::Impl::SameAsAnalysed(const SparseColMajor& lower) const {
+bool SingleFactor::SameAsAnalysed(const SparseColMajor& lower) const {
   const int n = static_cast<int>(lower.cols());
   if (factor_ == nullptr || !lower.isCompressed() || perm_.size() != static_cast<std::size_t>(n) ||
       target_.size() != static_cast<std::size_t>(lower.outerIndexPtr()[n]))
@@ -339,8 +285,8 @@ bool SparseCholesky::Impl::SameAsAnalysed(const SparseColMajor& lower) const {
   return true;
 }
 
-bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
-                                     bool same_pattern) {
+bool SingleFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
+                             bool same_pattern) {
   if (factor_ != nullptr && !same_pattern && !SameAsAnalysed(lower))
     cholmod_free_factor(&factor_, &common_);
   if (factor_ == nullptr)
@@ -355,6 +301,18 @@ bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::V
       values_[static_cast<std::size_t>(target_[static_cast<std::size_t>(k)])] =
           v[k] + (rows[k] == j ? d(j) : 0.0);
   }
+  return FactorizeValues();
+}
+
+std::vector<int> SingleFactor::Positions() const {
+  std::vector<int> position(perm_.size());
+  for (std::size_t q = 0; q < perm_.size(); ++q)
+    position[static_cast<std::size_t>(perm_[q])] = static_cast<int>(q);
+  return position;
+}
+
+bool SingleFactor::FactorizeValues() {
+  const int n = static_cast<int>(perm_.size());
   const cholmod_sparse a =
       View(n, col_start_.data(), row_index_.data(), values_.data(), true, upper_);
   if (!cholmod_factorize(const_cast<cholmod_sparse*>(&a), factor_, &common_))
@@ -380,9 +338,8 @@ bool SparseCholesky::Impl::Factorize(const SparseColMajor& lower, const Eigen::V
   return true;
 }
 
-cholmod_dense SparseCholesky::Impl::PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B,
-                                                const Eigen::VectorXd* last,
-                                                Workspace::Impl* w) const {
+cholmod_dense SingleFactor::PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                                        const Eigen::VectorXd* last, WorkspaceImpl* w) const {
   const std::size_t n = perm_.size();
   const auto k = static_cast<std::size_t>(B.cols()) + (last != nullptr ? 1 : 0);
   w->rhs.resize(n * k);
@@ -396,8 +353,7 @@ cholmod_dense SparseCholesky::Impl::PermutedRhs(const Eigen::Ref<const Eigen::Ma
   return DenseView(w->rhs.data(), n, k);
 }
 
-bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
-                                 Workspace::Impl* w) const {
+bool SingleFactor::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, WorkspaceImpl* w) const {
   cholmod_dense b = PermutedRhs(B, nullptr, w);
   // The factor is only read (CHOLMOD_A on a supernodal LL^T): several workspaces may solve at once.
   if (!cholmod_solve2(CHOLMOD_A, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
@@ -405,8 +361,7 @@ bool SparseCholesky::Impl::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X,
   return Unpermuted(*w, B.cols(), X);
 }
 
-bool SparseCholesky::Impl::Unpermuted(const Workspace::Impl& w, Eigen::Index cols,
-                                      Eigen::MatrixXd* X) const {
+bool SingleFactor::Unpermuted(const WorkspaceImpl& w, Eigen::Index cols, Eigen::MatrixXd* X) const {
   const double* x = static_cast<const double*>(w.x->x);
   X->resize(static_cast<Eigen::Index>(perm_.size()), cols);
   for (Eigen::Index c = 0; c < cols; ++c) {
@@ -419,9 +374,9 @@ bool SparseCholesky::Impl::Unpermuted(const Workspace::Impl& w, Eigen::Index col
 // P A P^T = L D L^T (D = I for LL^T; the order is P, CHOLMOD's own being the natural one), so
 // A^-1 = (D^1/2 L^T P)^-1 (D^1/2 L^T P)^-T and R^-T B = D^-1/2 L^-1 (P B): CHOLMOD_L solves with
 // L alone (its unit diagonal for LDL^T), and the rows are scaled by D^-1/2.
-bool SparseCholesky::Impl::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
-                                     const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
-                                     Workspace::Impl* w) const {
+bool SingleFactor::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                             const Eigen::VectorXd* last, Eigen::Ref<Eigen::MatrixXd> X,
+                             WorkspaceImpl* w) const {
   cholmod_dense b = PermutedRhs(B, last, w);
   if (!cholmod_solve2(CHOLMOD_L, factor_, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common))
     return false;
@@ -442,8 +397,8 @@ bool SparseCholesky::Impl::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B,
 
 // R^-1 X = P^T L^-T D^-1/2 X: the rows scaled by D^-1/2 (LDL^T), CHOLMOD_Lt with L alone, and the
 // rows back to A's order.
-bool SparseCholesky::Impl::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X,
-                                         Eigen::MatrixXd* Y, Workspace::Impl* w) const {
+bool SingleFactor::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
+                                 WorkspaceImpl* w) const {
   const std::size_t n = perm_.size();
   const auto k = static_cast<std::size_t>(X.cols());
   w->rhs.resize(n * k);

@@ -18,6 +18,10 @@
 
 namespace ctcal {
 
+class Factor;
+struct SingleFactor;
+struct SplitFactor;
+
 class SparseCholesky {
  public:
   using SparseColMajor = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
@@ -39,6 +43,14 @@ class SparseCholesky {
   // vouches that `lower` has the pattern of the last call (the steps of one solve, whose H_nn's
   // pattern is fixed), and the check is skipped (0.7 % of EuRoC's CPU, on the step's one thread).
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern = false);
+
+  // With 2 threads or more and kAuto, a new pattern is split where that pays: its two halves
+  // around a small separator factored at once on two threads (SplitFactor,
+  // sparse_cholesky_impl.h). The result differs from the single factor's in its rounding only,
+  // and depends on the threads only through this choice. From the next new pattern on.
+  void SetThreads(int threads);
+  // Whether the last analysis split the matrix.
+  bool Split() const;
 
   // Frees the factor's values (and Solve(B, X)'s workspace, as ReleaseSolveWorkspace) and keeps
   // its analysis for the next Factorize of the same pattern: the spline calibration's robust and
@@ -65,6 +77,9 @@ class SparseCholesky {
 
    private:
     friend class SparseCholesky;
+    friend class Factor;
+    friend struct SingleFactor;
+    friend struct SplitFactor;
     struct Impl;
     std::unique_ptr<Impl> impl_;
   };

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "../../../calibrator/src/solver/sparse_cholesky.h"
+#include "solves_on_threads.h"
 
 namespace ctcal {
 namespace {
@@ -108,36 +109,10 @@ class SparseCholeskyOf : public ::testing::TestWithParam<bool> {};
 // thread's solve gives the bits the one-workspace Solve gives, the factor shared.
 TEST_P(SparseCholeskyOf, KindSolvesOnSeveralThreadsWithTheSameBits) {
   std::mt19937 rng(7);
-  std::normal_distribution<double> normal(0.0, 1.0);
   const SparseColMajor A = GetParam() ? DenseLower(200, &rng) : BandWithBiases(300, &rng, 1.0);
   SparseCholesky chol;
   ASSERT_TRUE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), 1e-3)));
-  constexpr int kThreads = 4, kRounds = 20;
-  std::vector<Eigen::MatrixXd> B(kThreads), expected(kThreads);
-  for (int t = 0; t < kThreads; ++t) {
-    B[t].resize(A.rows(), 8 + t);
-    for (int i = 0; i < B[t].size(); ++i)
-      B[t].data()[i] = normal(rng);
-    ASSERT_TRUE(chol.Solve(B[t], &expected[t]));
-  }
-  std::vector<int> same(kThreads, 0);
-  std::vector<std::thread> threads;
-  for (int t = 0; t < kThreads; ++t) {
-    threads.emplace_back([&, t] {
-      SparseCholesky::Workspace workspace;
-      Eigen::MatrixXd X;
-      for (int round = 0; round < kRounds; ++round) {
-        if (chol.Solve(B[t], &X, &workspace) && X == expected[t])
-          ++same[t];
-        if (round % 5 == 4)
-          workspace.Release();
-      }
-    });
-  }
-  for (std::thread& th : threads)
-    th.join();
-  for (int t = 0; t < kThreads; ++t)
-    EXPECT_EQ(same[t], kRounds) << "thread " << t;
+  test::ExpectTheSameBitsOnThreads(chol, A.rows(), 4, 20, &rng);
 }
 
 // The half solve X = R^-T B (A + diag(d) = R^T R) of the Schur complement: B^T A^-1 C = X^T Y

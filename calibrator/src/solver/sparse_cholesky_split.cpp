@@ -1,0 +1,360 @@
+// SplitFactor (sparse_cholesky_impl.h): the nuisance block factored as two halves on two threads
+// and a dense separator.
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "ctcal/sensors/parallel_for.h"
+#include "sparse_cholesky_impl.h"
+
+namespace ctcal {
+
+std::unique_ptr<SplitFactor> SplitFactor::Analyze(const SparseColMajor& lower) {
+  const int n = static_cast<int>(lower.cols());
+  if (n < kMinColumns || !lower.isCompressed())
+    return nullptr;
+  const int* p = lower.outerIndexPtr();
+  const int* rows = lower.innerIndexPtr();
+
+  // METIS' vertex separator of the graph (on the compressed graph: a knot's columns share their
+  // rows, and METIS then sees one vertex per knot).
+  std::vector<int> part(static_cast<std::size_t>(n));
+  {
+    cholmod_common common;
+    cholmod_start(&common);
+    common.print = 0;
+    const cholmod_sparse a = View(n, p, rows, lower.valuePtr(), false);
+    const auto s =
+        cholmod_bisect(const_cast<cholmod_sparse*>(&a), nullptr, 0, 1, part.data(), &common);
+    const bool ok = common.status == CHOLMOD_OK;
+    cholmod_finish(&common);
+    if (!ok || s < 1 || s > kMaxSeparator)
+      return nullptr;
+  }
+  auto split = std::make_unique<SplitFactor>();
+  split->part.assign(part.begin(), part.end());
+  split->local.resize(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    const int k = part[static_cast<std::size_t>(j)];
+    std::vector<int>& to = k == 2 ? split->separator : split->half[k].global;
+    split->local[static_cast<std::size_t>(j)] = static_cast<int>(to.size());
+    to.push_back(j);
+  }
+  for (const Half& h : split->half) {
+    if (4 * static_cast<std::int64_t>(h.global.size()) < n)
+      return nullptr;
+  }
+  const std::vector<int>& local = split->local;
+
+  // The entries between the halves and the separator, and within the separator.
+  std::vector<std::vector<char>> coupled(2);
+  for (int k = 0; k < 2; ++k)
+    coupled[static_cast<std::size_t>(k)].assign(split->half[k].global.size(), 0);
+  std::vector<Coupling> couplings[2];  // rows still local indices
+  for (int j = 0; j < n; ++j) {
+    const int pj = part[static_cast<std::size_t>(j)];
+    for (int e = p[j]; e < p[j + 1]; ++e) {
+      const int i = rows[e];
+      const int pi = part[static_cast<std::size_t>(i)];
+      const int li = local[static_cast<std::size_t>(i)], lj = local[static_cast<std::size_t>(j)];
+      if (pi == pj && pi < 2)
+        continue;
+      if (pi == 2 && pj == 2) {
+        split->separator_entries.emplace_back(e, std::max(li, lj), std::min(li, lj));
+      } else if (pi == 2 || pj == 2) {
+        const int k = pi == 2 ? pj : pi;
+        const int row = pi == 2 ? lj : li;
+        couplings[k].push_back(Coupling{e, row, pi == 2 ? li : lj});
+        coupled[static_cast<std::size_t>(k)][static_cast<std::size_t>(row)] = 1;
+      } else {
+        return nullptr;  // not a separator (cannot happen for METIS' result)
+      }
+    }
+  }
+  // The columns coupled to the separator go last in their half's order (their W rows are then a
+  // tail), and with them the dense columns next to them (a bias knot couples to a second of
+  // trajectory knots): eliminated before those, it would fill all of them in with each other.
+  {
+    std::vector<int> degree(static_cast<std::size_t>(n), 0);
+    for (int j = 0; j < n; ++j) {
+      for (int e = p[j]; e < p[j + 1]; ++e) {
+        ++degree[static_cast<std::size_t>(j)];
+        if (rows[e] != j)
+          ++degree[static_cast<std::size_t>(rows[e])];
+      }
+    }
+    std::vector<int> sorted = degree;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    const int dense = 4 * sorted[static_cast<std::size_t>(n / 2)];
+    for (int j = 0; j < n; ++j) {
+      const int pj = part[static_cast<std::size_t>(j)];
+      for (int e = p[j]; e < p[j + 1]; ++e) {
+        const int i = rows[e];
+        if (part[static_cast<std::size_t>(i)] != pj || pj == 2)
+          continue;
+        auto& c = coupled[static_cast<std::size_t>(pj)];
+        const int li = local[static_cast<std::size_t>(i)], lj = local[static_cast<std::size_t>(j)];
+        if (c[static_cast<std::size_t>(li)] == 1 && degree[static_cast<std::size_t>(j)] >= dense)
+          c[static_cast<std::size_t>(lj)] = 2;
+        if (c[static_cast<std::size_t>(lj)] == 1 && degree[static_cast<std::size_t>(i)] >= dense)
+          c[static_cast<std::size_t>(li)] = 2;
+      }
+    }
+  }
+  // Each half's pattern (its entries in the matrix's order, local indices), analysed and dropped
+  // before the next is built.
+  for (int k = 0; k < 2; ++k) {
+    Half& h = split->half[k];
+    const int nk = static_cast<int>(h.global.size());
+    SparseColMajor half_lower(nk, nk);
+    {
+      std::vector<int> start(static_cast<std::size_t>(nk) + 1, 0);
+      for (int lj = 0; lj < nk; ++lj) {
+        const int j = h.global[static_cast<std::size_t>(lj)];
+        int count = 0;
+        for (int e = p[j]; e < p[j + 1]; ++e)
+          count += part[static_cast<std::size_t>(rows[e])] == k;
+        start[static_cast<std::size_t>(lj) + 1] = start[static_cast<std::size_t>(lj)] + count;
+      }
+      half_lower.resizeNonZeros(start[static_cast<std::size_t>(nk)]);
+      std::copy(start.begin(), start.end(), half_lower.outerIndexPtr());
+      std::fill_n(half_lower.valuePtr(), start[static_cast<std::size_t>(nk)], 0.0);
+      int at = 0;
+      for (const int j : h.global) {
+        for (int e = p[j]; e < p[j + 1]; ++e) {
+          if (part[static_cast<std::size_t>(rows[e])] == k)
+            half_lower.innerIndexPtr()[at++] = local[static_cast<std::size_t>(rows[e])];
+        }
+      }
+    }
+    std::vector<int> last_set;
+    for (std::size_t i = 0; i < coupled[static_cast<std::size_t>(k)].size(); ++i) {
+      if (coupled[static_cast<std::size_t>(k)][i])
+        last_set.push_back(static_cast<int>(i));
+    }
+    h.factor.Analyze(half_lower, last_set);
+    // CHOLMOD's switch would make this half supernodal (many sensors): the single factor's
+    // choice, whose supernodes pay there.
+    if (h.factor.factor_->is_super ||
+        h.factor.common_.fl >= SparseCholesky::kSupernodalSwitch * h.factor.common_.lnz)
+      return nullptr;
+    const std::vector<int> position = h.factor.Positions();
+    h.tail = nk;
+    for (const Coupling& c : couplings[k])
+      h.tail = std::min(h.tail, position[static_cast<std::size_t>(c.row)]);
+    for (Coupling& c : couplings[k])
+      c.row = position[static_cast<std::size_t>(c.row)] - h.tail;
+    h.coupling = std::move(couplings[k]);
+  }
+  split->outer.assign(p, p + n + 1);
+  return split;
+}
+
+// Every entry where the analysis put it: the same count per column (outer), each half's entries
+// at their factor slots' rows and columns (SingleFactor::SameAsAnalysed's test, streamed), the
+// couplings and the separator's entries at their indices. The map is one to one, so this is the
+// same pattern, without a copy of it kept.
+bool SplitFactor::SameAsAnalysed(const SparseColMajor& lower) const {
+  const int n = static_cast<int>(lower.cols());
+  if (!lower.isCompressed() || outer.size() != static_cast<std::size_t>(n) + 1 ||
+      !std::equal(outer.begin(), outer.end(), lower.outerIndexPtr()))
+    return false;
+  const int* p = lower.outerIndexPtr();
+  const int* rows = lower.innerIndexPtr();
+  std::size_t at[2] = {0, 0}, coupling_at[2] = {0, 0}, separator_at = 0;
+  std::vector<int> position[2] = {half[0].factor.Positions(), half[1].factor.Positions()};
+  for (int j = 0; j < n; ++j) {
+    const int pj = part[static_cast<std::size_t>(j)];
+    const int lj = local[static_cast<std::size_t>(j)];
+    for (int e = p[j]; e < p[j + 1]; ++e) {
+      const int i = rows[e];
+      if (i < j)
+        return false;
+      const int pi = part[static_cast<std::size_t>(i)];
+      const int li = local[static_cast<std::size_t>(i)];
+      if (pi == pj && pi < 2) {
+        const SingleFactor& f = half[pi].factor;
+        if (at[pi] >= f.target_.size() ||
+            !f.Holds(f.target_[at[pi]++], position[pi][static_cast<std::size_t>(li)],
+                     position[pi][static_cast<std::size_t>(lj)]))
+          return false;
+      } else if (pi == 2 && pj == 2) {
+        if (separator_at >= separator_entries.size() ||
+            separator_entries[separator_at++] != std::make_tuple(e, li, lj))
+          return false;
+      } else if (pi == 2 || pj == 2) {
+        const int k = pi == 2 ? pj : pi;
+        const Half& h = half[k];
+        const int row = position[k][static_cast<std::size_t>(pi == 2 ? lj : li)] - h.tail;
+        if (coupling_at[k] >= h.coupling.size())
+          return false;
+        const Coupling& c = h.coupling[coupling_at[k]++];
+        if (c.entry != e || c.row != row || c.column != (pi == 2 ? li : lj))
+          return false;
+      } else {
+        return false;
+      }
+    }
+  }
+  return at[0] == half[0].factor.target_.size() && at[1] == half[1].factor.target_.size() &&
+         coupling_at[0] == half[0].coupling.size() && coupling_at[1] == half[1].coupling.size() &&
+         separator_at == separator_entries.size();
+}
+
+bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
+  const double* v = lower.valuePtr();
+  const auto s = static_cast<Eigen::Index>(separator.size());
+  char factored[2] = {0, 0};
+  ParallelFor(2, 2, [&](std::size_t k) {
+    Half& h = half[k];
+    // A_k + D_k straight into the factor's permuted copy (SingleFactor::Factorize's scatter).
+    const int* p = lower.outerIndexPtr();
+    const int* rows = lower.innerIndexPtr();
+    std::vector<double>& values = h.factor.values_;
+    values.resize(h.factor.target_.size());
+    std::size_t at = 0;
+    for (const int j : h.global) {
+      for (int e = p[j]; e < p[j + 1]; ++e) {
+        if (part[static_cast<std::size_t>(rows[e])] != static_cast<char>(k))
+          continue;
+        values[static_cast<std::size_t>(h.factor.target_[at++])] =
+            v[e] + (rows[e] == j ? d(j) : 0.0);
+      }
+    }
+    if (!h.factor.FactorizeValues())
+      return;
+    // W_k = R_k^-T C_k = D^-1/2 L^-1 (P C_k) on the tail: L's unit diagonal, column by column,
+    // each finished row of W subtracted from the rows below it that L's column names.
+    const auto m = static_cast<Eigen::Index>(h.global.size()) - h.tail;
+    h.W.setZero(m, s);
+    for (const Coupling& c : h.coupling)
+      h.W(c.row, c.column) += v[c.entry];
+    const cholmod_factor* L = h.factor.factor_;
+    const int* Lp = static_cast<const int*>(L->p);
+    const int* Li = static_cast<const int*>(L->i);
+    const int* Lnz = static_cast<const int*>(L->nz);
+    const double* Lx = static_cast<const double*>(L->x);
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const int col = h.tail + static_cast<int>(r);
+      for (int e = Lp[col] + 1; e < Lp[col] + Lnz[col]; ++e)
+        h.W.row(Li[e] - h.tail) -= Lx[e] * h.W.row(r);
+    }
+    for (Eigen::Index r = 0; r < m; ++r)
+      h.W.row(r) *= h.factor.half_scale_[static_cast<std::size_t>(h.tail + r)];
+    h.gram.noalias() = h.W.transpose() * h.W;
+    factored[k] = 1;
+  });
+  if (!factored[0] || !factored[1])
+    return false;
+  Eigen::MatrixXd S = -half[0].gram - half[1].gram;
+  for (const auto& [e, i, j] : separator_entries) {
+    S(i, j) += v[e];
+    if (i != j)
+      S(j, i) += v[e];
+  }
+  for (Eigen::Index i = 0; i < s; ++i)
+    S(i, i) += d(separator[static_cast<std::size_t>(i)]);
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success || !S.allFinite())
+    return false;
+  L_s = llt.matrixL();
+  return true;
+}
+
+void SplitFactor::ReleaseNumeric() {
+  for (Half& h : half) {
+    h.factor.ReleaseNumeric();
+    h.W = RowMajor();
+  }
+  solve_.Release();
+}
+
+double SplitFactor::NonZeros() const {
+  double nnz = 0.5 * static_cast<double>(separator.size() * (separator.size() + 1));
+  for (const Half& h : half)
+    nnz += h.factor.common_.lnz + static_cast<double>(h.W.size());
+  return nnz;
+}
+
+double SplitFactor::Flops() const {
+  double flops = 0.0;
+  for (const Half& h : half)
+    flops += h.factor.common_.fl;
+  return flops;
+}
+
+// R^T y = b by blocks: y_k = R_k^-T b_k, y_s = R_s^-T (b_s - W_0^T y_0 - W_1^T y_1). The rows of y
+// are the halves' factor orders, then the separator's.
+bool SplitFactor::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::VectorXd* last,
+                            Eigen::Ref<Eigen::MatrixXd> X, WorkspaceImpl* w) const {
+  const Eigen::Index cols = B.cols() + (last != nullptr ? 1 : 0);
+  const auto s = static_cast<Eigen::Index>(separator.size());
+  Eigen::MatrixXd rhs_s(s, cols);
+  for (Eigen::Index i = 0; i < s; ++i) {
+    const int g = separator[static_cast<std::size_t>(i)];
+    rhs_s.row(i).head(B.cols()) = B.row(g);
+    if (last != nullptr)
+      rhs_s(i, B.cols()) = (*last)(g);
+  }
+  Eigen::Index offset = 0;
+  for (int k = 0; k < 2; ++k) {
+    const Half& h = half[k];
+    const auto nk = static_cast<Eigen::Index>(h.global.size());
+    Eigen::MatrixXd Bk(nk, B.cols());
+    Eigen::VectorXd lk;
+    for (Eigen::Index i = 0; i < nk; ++i)
+      Bk.row(i) = B.row(h.global[static_cast<std::size_t>(i)]);
+    if (last != nullptr) {
+      lk.resize(nk);
+      for (Eigen::Index i = 0; i < nk; ++i)
+        lk(i) = (*last)(h.global[static_cast<std::size_t>(i)]);
+    }
+    auto Xk = X.middleRows(offset, nk);
+    if (!h.factor.HalfSolve(Bk, last != nullptr ? &lk : nullptr, Xk, k == 0 ? w : w->Second()))
+      return false;
+    // Column by column, as below: a column's bits do not depend on the others solved with it
+    // (the single factor's property, which the chunks of the border's solves rely on).
+    for (Eigen::Index c = 0; c < cols; ++c)
+      rhs_s.col(c).noalias() -= h.W.transpose() * Xk.col(c).tail(h.W.rows());
+    offset += nk;
+  }
+  for (Eigen::Index c = 0; c < cols; ++c)
+    X.col(c).tail(s) = L_s.triangularView<Eigen::Lower>().solve(rhs_s.col(c));
+  return X.allFinite();
+}
+
+// R x = y by blocks: x_s = R_s^-1 y_s, x_k = R_k^-1 (y_k - W_k x_s), back in A's order.
+bool SplitFactor::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd* Y,
+                                WorkspaceImpl* w) const {
+  const auto s = static_cast<Eigen::Index>(separator.size());
+  const Eigen::Index cols = X.cols();
+  Eigen::MatrixXd x_s(s, cols);
+  for (Eigen::Index c = 0; c < cols; ++c)
+    x_s.col(c) = L_s.transpose().triangularView<Eigen::Upper>().solve(X.col(c).tail(s));
+  Y->resize(X.rows(), cols);
+  Eigen::Index offset = 0;
+  Eigen::MatrixXd Yk;
+  for (int k = 0; k < 2; ++k) {
+    const Half& h = half[k];
+    const auto nk = static_cast<Eigen::Index>(h.global.size());
+    Eigen::MatrixXd Zk = X.middleRows(offset, nk);
+    for (Eigen::Index c = 0; c < cols; ++c)
+      Zk.col(c).tail(h.W.rows()).noalias() -= h.W * x_s.col(c);
+    if (!h.factor.HalfSolveBack(Zk, &Yk, k == 0 ? w : w->Second()))
+      return false;
+    for (Eigen::Index i = 0; i < nk; ++i)
+      Y->row(h.global[static_cast<std::size_t>(i)]) = Yk.row(i);
+    offset += nk;
+  }
+  for (Eigen::Index i = 0; i < s; ++i)
+    Y->row(separator[static_cast<std::size_t>(i)]) = x_s.row(i);
+  return Y->allFinite();
+}
+
+bool SplitFactor::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, WorkspaceImpl* w) const {
+  Eigen::MatrixXd half_solved(B.rows(), B.cols());
+  return HalfSolve(B, nullptr, half_solved, w) && HalfSolveBack(half_solved, X, w);
+}
+
+}  // namespace ctcal
