@@ -104,9 +104,10 @@ void SparseCholesky::ReleaseSolveWorkspace() {
 void SingleFactor::Analyze(const SparseColMajor& lower, const std::vector<int>& last_set) {
   if (!lower.isCompressed())
     throw std::logic_error("SparseCholesky: the matrix must be in compressed form");
-  const int n = static_cast<int>(lower.cols());
-  const int* p = lower.outerIndexPtr();
-  const int* rows = lower.innerIndexPtr();
+  Analyze(static_cast<int>(lower.cols()), lower.outerIndexPtr(), lower.innerIndexPtr(), last_set);
+}
+
+void SingleFactor::Analyze(int n, const int* p, const int* rows, const std::vector<int>& last_set) {
   const auto nnz = static_cast<std::size_t>(p[n]);
 
   // The fill-reducing order: CHOLMOD's AMD on H_nn's pattern as given, which postorders its
@@ -118,7 +119,7 @@ void SingleFactor::Analyze(const SparseColMajor& lower, const std::vector<int>& 
   cholmod_defaults(&common_);
   common_.print = 0;
   {
-    const cholmod_sparse a = View(n, p, rows, lower.valuePtr(), false);
+    const cholmod_sparse a = View(n, p, rows, nullptr, false);
     perm_.resize(static_cast<std::size_t>(n));
     // With a last set (SplitFactor's rows coupled to its separator), CAMD: AMD's order within
     // each constraint set, set 0 before set 1.

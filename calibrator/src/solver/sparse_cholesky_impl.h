@@ -28,7 +28,7 @@ inline cholmod_sparse View(int n, const int* col_start, const int* row_index, co
   s.x = const_cast<double*>(values);
   s.stype = upper ? 1 : -1;
   s.itype = CHOLMOD_INT;
-  s.xtype = CHOLMOD_REAL;
+  s.xtype = values != nullptr ? CHOLMOD_REAL : CHOLMOD_PATTERN;  // no values: an ordering's input
   s.dtype = CHOLMOD_DOUBLE;
   s.sorted = sorted ? 1 : 0;
   s.packed = 1;
@@ -119,6 +119,8 @@ struct SingleFactor final : Factor {
 
   // `last_set`: columns the order must put after all others (CAMD's constraint), or empty.
   void Analyze(const SparseColMajor& lower, const std::vector<int>& last_set = {});
+  // The same from the pattern alone (compressed columns of the lower triangle).
+  void Analyze(int n, const int* p, const int* rows, const std::vector<int>& last_set);
   void StoreUpper();
   bool SameAsAnalysed(const SparseColMajor& lower) const;
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
