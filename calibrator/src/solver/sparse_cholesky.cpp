@@ -305,6 +305,13 @@ bool SingleFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd&
   return FactorizeValues();
 }
 
+void SingleFactor::AllocateNumeric() {
+  // Unpacked: each column keeps the room its count reserves, which cholmod_rowfac fills (packed,
+  // every column would be reallocated as it grows).
+  if (factor_ != nullptr && factor_->xtype == CHOLMOD_PATTERN && !factor_->is_super)
+    cholmod_change_factor(CHOLMOD_REAL, factor_->is_ll, 0, 0, 0, factor_, &common_);
+}
+
 std::vector<int> SingleFactor::Positions() const {
   std::vector<int> position(perm_.size());
   for (std::size_t q = 0; q < perm_.size(); ++q)
@@ -348,8 +355,9 @@ cholmod_dense SingleFactor::PermutedRhs(const Eigen::Ref<const Eigen::MatrixXd>&
     const double* column = c < static_cast<std::size_t>(B.cols())
                                ? B.data() + static_cast<Eigen::Index>(c) * B.outerStride()
                                : last->data();
+    const std::vector<int>& from = gather_.empty() ? perm_ : gather_;
     for (std::size_t q = 0; q < n; ++q)
-      w->rhs[c * n + q] = column[perm_[q]];
+      w->rhs[c * n + q] = column[from[q]];
   }
   return DenseView(w->rhs.data(), n, k);
 }
@@ -364,12 +372,18 @@ bool SingleFactor::Solve(const Eigen::MatrixXd& B, Eigen::MatrixXd* X, Workspace
 
 bool SingleFactor::Unpermuted(const WorkspaceImpl& w, Eigen::Index cols, Eigen::MatrixXd* X) const {
   const double* x = static_cast<const double*>(w.x->x);
-  X->resize(static_cast<Eigen::Index>(perm_.size()), cols);
+  if (gather_.empty())
+    X->resize(static_cast<Eigen::Index>(perm_.size()), cols);
+  const std::vector<int>& to = gather_.empty() ? perm_ : gather_;
+  bool finite = true;
   for (Eigen::Index c = 0; c < cols; ++c) {
-    for (std::size_t q = 0; q < perm_.size(); ++q)
-      (*X)(perm_[q], c) = x[static_cast<std::size_t>(c) * w.x->d + q];
+    for (std::size_t q = 0; q < to.size(); ++q) {
+      const double v = x[static_cast<std::size_t>(c) * w.x->d + q];
+      (*X)(to[q], c) = v;
+      finite = finite && std::isfinite(v);
+    }
   }
-  return X->allFinite();
+  return finite;
 }
 
 // P A P^T = L D L^T (D = I for LL^T; the order is P, CHOLMOD's own being the natural one), so

@@ -126,6 +126,9 @@ struct SingleFactor final : Factor {
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
   // Factorize's second half: values_ filled by the caller (through target_).
   bool FactorizeValues();
+  // A simplicial factor's numeric part allocated now, on the calling thread (Factorize would
+  // allocate it on the thread that factors).
+  void AllocateNumeric();
   // The matrix's index -> its position in the factor's order.
   std::vector<int> Positions() const;
   // Whether slot `at` of the permuted copy holds the entry of permuted row and column a and b (in
@@ -164,6 +167,10 @@ struct SingleFactor final : Factor {
   std::vector<double> values_;
   // D^-1/2 of a simplicial LDL^T factor, in the factor's order (HalfSolve); empty for LL^T.
   std::vector<double> half_scale_;
+  // A half of SplitFactor's: per factor position, the row of the whole matrix it is (perm_
+  // composed with the half's columns): its solves read B's and write Y's rows of the whole
+  // matrix, without a copy of the half's rows (Unpermuted then leaves Y's size to the caller).
+  std::vector<int> gather_;
 };
 
 // A = [A_0 0 C_0; 0 A_1 C_1; C_0^T C_1^T A_s] (rows and columns grouped by a vertex separator s of
@@ -181,7 +188,10 @@ struct SplitFactor final : Factor {
   // larger than kMaxSeparator or a half with less than a quarter of the columns, or halves whose
   // factors CHOLMOD's switch would make supernodal (the single factor's choice then).
   static std::unique_ptr<SplitFactor> Analyze(const SparseColMajor& lower);
-  static constexpr int kMinColumns = 4000;
+  // Measured with the whole command (A/B pairs, docs/performance.md, issue 23 session 22): EuRoC's
+  // 36 s (30912 columns) 0.94 with the split; the demo rig (13302 columns, its step dominated by
+  // its 97 border columns' solves) 1.00, with ~2 MB more peak: not split.
+  static constexpr int kMinColumns = 20000;
   static constexpr int kMaxSeparator = 256;
 
   bool SameAsAnalysed(const SparseColMajor& lower) const;
@@ -218,6 +228,7 @@ struct SplitFactor final : Factor {
   std::vector<std::tuple<int, int, int>> separator_entries;  // (entry, i, j), i >= j
   Eigen::MatrixXd L_s;                                       // R_s^T (lower)
   std::vector<int> outer;                                    // the analysed pattern's column starts
+  bool first_done_ = false;  // a factorisation of this analysis has allocated its buffers
 };
 
 struct SparseCholesky::Impl {

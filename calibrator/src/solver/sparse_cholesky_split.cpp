@@ -209,6 +209,9 @@ std::unique_ptr<SplitFactor> SplitFactor::Analyze(const SparseColMajor& lower) {
     for (Coupling& c : couplings[k])
       c.row = position[static_cast<std::size_t>(c.row)] - h.tail;
     h.coupling = std::move(couplings[k]);
+    h.factor.gather_.resize(h.global.size());
+    for (std::size_t q = 0; q < h.global.size(); ++q)
+      h.factor.gather_[q] = h.global[static_cast<std::size_t>(h.factor.perm_[q])];
   }
   split->outer.assign(p, p + n + 1);
   return split;
@@ -269,7 +272,15 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
   const double* v = lower.valuePtr();
   const auto s = static_cast<Eigen::Index>(separator.size());
   char factored[2] = {0, 0};
-  ParallelFor(2, 2, [&](std::size_t k) {
+  // Everything a factorisation allocates is allocated on the calling thread: allocated on the
+  // helper thread, it landed in that thread's heap arena, whose pages the calling thread's later
+  // allocations cannot reuse (EuRoC's 36 s: the cross-validation's subset peaked 5 MB higher). The
+  // first factorisation after the analysis runs the halves one after the other here (CHOLMOD's
+  // work arrays, W, D^-1/2: kept, the later ones reuse them), and a factor's values freed by
+  // ReleaseNumeric are allocated again before the threads start.
+  for (Half& h : half)
+    h.factor.AllocateNumeric();
+  ParallelFor(first_done_ ? 2 : 1, 2, [&](std::size_t k) {
     Half& h = half[k];
     // A_k + D_k straight into the factor's permuted copy (SingleFactor::Factorize's scatter).
     const int* p = lower.outerIndexPtr();
@@ -310,6 +321,7 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
   });
   if (!factored[0] || !factored[1])
     return false;
+  first_done_ = true;
   Eigen::MatrixXd S = -half[0].gram - half[1].gram;
   for (const auto& [e, i, j] : separator_entries) {
     S(i, j) += v[e];
@@ -364,17 +376,9 @@ bool SplitFactor::HalfSolve(const Eigen::Ref<const Eigen::MatrixXd>& B, const Ei
   for (int k = 0; k < 2; ++k) {
     const Half& h = half[k];
     const auto nk = static_cast<Eigen::Index>(h.global.size());
-    Eigen::MatrixXd Bk(nk, B.cols());
-    Eigen::VectorXd lk;
-    for (Eigen::Index i = 0; i < nk; ++i)
-      Bk.row(i) = B.row(h.global[static_cast<std::size_t>(i)]);
-    if (last != nullptr) {
-      lk.resize(nk);
-      for (Eigen::Index i = 0; i < nk; ++i)
-        lk(i) = (*last)(h.global[static_cast<std::size_t>(i)]);
-    }
     auto Xk = X.middleRows(offset, nk);
-    if (!h.factor.HalfSolve(Bk, last != nullptr ? &lk : nullptr, Xk, k == 0 ? w : w->Second()))
+    // B's rows of the half read through its gather map (SingleFactor::gather_).
+    if (!h.factor.HalfSolve(B, last, Xk, k == 0 ? w : w->Second()))
       return false;
     // Column by column, as below: a column's bits do not depend on the others solved with it
     // (the single factor's property, which the chunks of the border's solves rely on).
@@ -397,17 +401,15 @@ bool SplitFactor::HalfSolveBack(const Eigen::Ref<const Eigen::MatrixXd>& X, Eige
     x_s.col(c) = L_s.transpose().triangularView<Eigen::Upper>().solve(X.col(c).tail(s));
   Y->resize(X.rows(), cols);
   Eigen::Index offset = 0;
-  Eigen::MatrixXd Yk;
   for (int k = 0; k < 2; ++k) {
     const Half& h = half[k];
     const auto nk = static_cast<Eigen::Index>(h.global.size());
     Eigen::MatrixXd Zk = X.middleRows(offset, nk);
     for (Eigen::Index c = 0; c < cols; ++c)
       Zk.col(c).tail(h.W.rows()).noalias() -= h.W * x_s.col(c);
-    if (!h.factor.HalfSolveBack(Zk, &Yk, k == 0 ? w : w->Second()))
+    // Y's rows of the half written through its gather map.
+    if (!h.factor.HalfSolveBack(Zk, Y, k == 0 ? w : w->Second()))
       return false;
-    for (Eigen::Index i = 0; i < nk; ++i)
-      Y->row(h.global[static_cast<std::size_t>(i)]) = Yk.row(i);
     offset += nk;
   }
   for (Eigen::Index i = 0; i < s; ++i)

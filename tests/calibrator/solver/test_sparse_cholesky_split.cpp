@@ -70,7 +70,7 @@ Eigen::MatrixXd Reference(const SparseColMajor& lower, const Eigen::VectorXd& d,
 
 TEST(SparseCholeskySplit, SplitsOnTwoThreadsAndSolvesAsTheReference) {
   std::mt19937 rng(3);
-  const SparseColMajor A = KnotsWithBiases(900, 140, &rng);
+  const SparseColMajor A = KnotsWithBiases(3500, 143, &rng);
   const auto n = A.rows();
   const Eigen::VectorXd d = Eigen::VectorXd::Constant(n, 1e-3);
   SparseCholesky split, single;
@@ -118,7 +118,7 @@ TEST(SparseCholeskySplit, SplitsOnTwoThreadsAndSolvesAsTheReference) {
 // of the one-workspace Solve.
 TEST(SparseCholeskySplit, SolvesOnSeveralThreadsWithTheSameBits) {
   std::mt19937 rng(5);
-  const SparseColMajor A = KnotsWithBiases(800, 100, &rng);
+  const SparseColMajor A = KnotsWithBiases(3400, 100, &rng);
   SparseCholesky chol;
   chol.SetThreads(2);
   ASSERT_TRUE(chol.Factorize(A, Eigen::VectorXd::Constant(A.rows(), 1e-3)));
@@ -131,7 +131,7 @@ TEST(SparseCholeskySplit, SolvesOnSeveralThreadsWithTheSameBits) {
 // solved right.
 TEST(SparseCholeskySplit, ReanalysesAPatternWithTheSameColumnCounts) {
   std::mt19937 rng(7);
-  const SparseColMajor A = KnotsWithBiases(900, 140, &rng);
+  const SparseColMajor A = KnotsWithBiases(3500, 143, &rng);
   const auto n = static_cast<int>(A.rows());
   // Column 0's last entry moved to a row it did not have (the damping d keeps both positive
   // definite).
@@ -169,7 +169,7 @@ TEST(SparseCholeskySplit, ReanalysesAPatternWithTheSameColumnCounts) {
 
 TEST(SparseCholeskySplit, RefusesAMatrixThatIsNotPositiveDefinite) {
   std::mt19937 rng(9);
-  const SparseColMajor A = KnotsWithBiases(900, 140, &rng);
+  const SparseColMajor A = KnotsWithBiases(3500, 143, &rng);
   const auto n = A.rows();
   SparseCholesky chol;
   chol.SetThreads(2);
@@ -188,8 +188,8 @@ TEST(SparseCholeskySplit, RefusesAMatrixThatIsNotPositiveDefinite) {
 
 TEST(SparseCholeskySplit, KeepsTheSingleFactorForSmallMatricesAndOneThread) {
   std::mt19937 rng(11);
-  const SparseColMajor small = KnotsWithBiases(200, 50, &rng);
-  const SparseColMajor large = KnotsWithBiases(900, 140, &rng);
+  const SparseColMajor small = KnotsWithBiases(2000, 143, &rng);
+  const SparseColMajor large = KnotsWithBiases(3500, 143, &rng);
   SparseCholesky two;
   two.SetThreads(2);
   ASSERT_TRUE(two.Factorize(small, Eigen::VectorXd::Constant(small.rows(), 1e-3)));
