@@ -7,8 +7,10 @@
 //                   lower triangle twice per call.
 //   SparseCholesky: calibrator/src/solver/sparse_cholesky.h: the permuted pattern built once,
 //                   H_nn + D scattered into it, factored in place, by CHOLMOD's simplicial or
-//                   supernodal factorisation (its switch, or forced: where each pays).
-// Results: docs/performance.md ("Issue 23", sessions 13-15).
+//                   supernodal factorisation (its switch, or forced: where each pays); with
+//                   2 threads on the EuRoC-shaped band, split in two halves factored at once
+//                   (SplitFactor, sparse_cholesky_impl.h).
+// Results: docs/performance.md ("Issue 23", sessions 13-15 and 22).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/CholmodSupport>
@@ -107,7 +109,7 @@ void BM_SparseCholesky(benchmark::State& state) {
   chol.SetThreads(static_cast<int>(state.range(3)));
   Eigen::MatrixXd X;
   for (auto _ : state) {
-    chol.Factorize(H, d);
+    chol.Factorize(H, d, true);  // the pattern of the last call, as a solve's steps
     chol.Solve(B, &X);
     chol.ReleaseSolveWorkspace();
     benchmark::DoNotOptimize(X.data());
@@ -119,7 +121,7 @@ void BM_SparseCholesky(benchmark::State& state) {
 }
 
 // A calibration's first step: the ordering and symbolic analysis of H_nn's pattern, then the
-// factorisation (range(1) as above).
+// factorisation, twice (range(1) as above; range(2): threads, 2 splits the EuRoC-shaped band).
 void BM_AnalyseAndFactorize(benchmark::State& state) {
   const int knots = static_cast<int>(state.range(0));
   const SparseColMajor H =
@@ -127,13 +129,18 @@ void BM_AnalyseAndFactorize(benchmark::State& state) {
   const Eigen::VectorXd d = Eigen::VectorXd::Constant(H.rows(), 1e-8);
   for (auto _ : state) {
     ctcal::SparseCholesky chol;
+    chol.SetThreads(static_cast<int>(state.range(2)));
     benchmark::DoNotOptimize(chol.Factorize(H, d));
+    // The second factorisation of the pattern: the first after an analysis allocates its buffers
+    // (one half after the other when split), the later ones run as the steps do.
+    benchmark::DoNotOptimize(chol.Factorize(H, d, true));
   }
 }
 
 // The step's Schur complement on the border (SubtractBorderSchur) after one factorisation:
 // range(0) knots, range(1) 0 EuRoC-shaped / 1 demo-shaped, range(2) border columns, range(3)
-// 0 half solves / 1 chunks of full solves, on 2 threads.
+// 0 half solves / 1 chunks of full solves, on 2 threads; range(4) the factorisation's threads (2:
+// the split factor's solves, on the EuRoC-shaped band).
 void BM_BorderSchur(benchmark::State& state) {
   const int knots = static_cast<int>(state.range(0));
   const SparseColMajor H =
@@ -148,7 +155,9 @@ void BM_BorderSchur(benchmark::State& state) {
   const Eigen::VectorXd g = Eigen::VectorXd::Ones(H.rows());
   const Eigen::MatrixXd H_cc = Eigen::MatrixXd::Identity(c, c) * 1e6;
   ctcal::SparseCholesky chol;
+  chol.SetThreads(static_cast<int>(state.range(4)));
   chol.Factorize(H, Eigen::VectorXd::Constant(H.rows(), 1e-8));
+  state.counters["split"] = chol.Split() ? 1.0 : 0.0;
   Eigen::VectorXd h;
   for (auto _ : state) {
     Eigen::MatrixXd S = H_cc;
@@ -159,14 +168,19 @@ void BM_BorderSchur(benchmark::State& state) {
 }
 
 BENCHMARK(BM_BorderSchur)
-    ->Args({5115, 0, 33, 0})
-    ->Args({5115, 0, 33, 1})
-    ->Args({2062, 1, 97, 0})
-    ->Args({2062, 1, 97, 1})
+    ->Args({5115, 0, 33, 0, 1})
+    ->Args({5115, 0, 33, 0, 2})
+    ->Args({5115, 0, 33, 1, 1})
+    ->Args({2062, 1, 97, 0, 1})
+    ->Args({2062, 1, 97, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Eigen)->Arg(5115)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_AnalyseAndFactorize)->Args({5115, 0})->Args({2062, 1})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AnalyseAndFactorize)
+    ->Args({5115, 0, 1})
+    ->Args({5115, 0, 2})
+    ->Args({2062, 1, 1})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SparseCholesky)
     ->ArgsProduct({{5115}, {0}, {0, 1, 2}, {1}})
     ->ArgsProduct({{5115}, {0}, {0}, {2}})
