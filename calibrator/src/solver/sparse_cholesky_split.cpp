@@ -17,7 +17,7 @@ namespace {
 // diagonal (a parameter block's columns, a knot's rotation and translation), one vertex each,
 // weighted by its columns. cholmod_bisect would first copy the whole pattern into both triangles
 // (~8 MB on EuRoC's 36 s, at the solve's memory peak); this graph is ~6x smaller. *part: per
-// column 0, 1 (the halves) or 2 (the separator). Returns the separator's columns, -1 on failure.
+// column 0, 1 (the halves) or 2 (the separator). Returns -1 where METIS failed.
 std::int64_t Bisect(int n, const int* p, const int* rows, std::vector<int>* part) {
   std::vector<int> group_of(static_cast<std::size_t>(n)), weight;
   for (int j = 0; j < n; ++j) {
@@ -98,8 +98,7 @@ std::unique_ptr<SplitFactor> SplitFactor::Analyze(const SparseColMajor& lower) {
   const int* rows = lower.innerIndexPtr();
 
   std::vector<int> part;
-  const std::int64_t separated = Bisect(n, p, rows, &part);
-  if (separated < 1 || separated > kMaxSeparator)
+  if (Bisect(n, p, rows, &part) < 0)
     return nullptr;
   auto split = std::make_unique<SplitFactor>();
   split->part.assign(part.begin(), part.end());
@@ -110,6 +109,9 @@ std::unique_ptr<SplitFactor> SplitFactor::Analyze(const SparseColMajor& lower) {
     split->local[static_cast<std::size_t>(j)] = static_cast<int>(to.size());
     to.push_back(j);
   }
+  const auto s = static_cast<int>(split->separator.size());
+  if (s < 1 || s > kMaxSeparator)
+    return nullptr;
   for (const Half& h : split->half) {
     if (4 * static_cast<std::int64_t>(h.global.size()) < n)
       return nullptr;
