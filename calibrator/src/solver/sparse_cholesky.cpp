@@ -310,6 +310,8 @@ void SingleFactor::AllocateNumeric() {
   // every column would be reallocated as it grows).
   if (factor_ != nullptr && factor_->xtype == CHOLMOD_PATTERN && !factor_->is_super)
     cholmod_change_factor(CHOLMOD_REAL, factor_->is_ll, 0, 0, 0, factor_, &common_);
+  values_.resize(target_.size());  // freed by ReleaseNumeric
+  half_scale_.reserve(perm_.size());
 }
 
 std::vector<int> SingleFactor::Positions() const {

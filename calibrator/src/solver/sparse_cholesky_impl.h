@@ -126,8 +126,8 @@ struct SingleFactor final : Factor {
   bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
   // Factorize's second half: values_ filled by the caller (through target_).
   bool FactorizeValues();
-  // A simplicial factor's numeric part allocated now, on the calling thread (Factorize would
-  // allocate it on the thread that factors).
+  // A simplicial factor's numeric part and the permuted copy of A allocated now, on the calling
+  // thread (Factorize would allocate them on the thread that factors).
   void AllocateNumeric();
   // The matrix's index -> its position in the factor's order.
   std::vector<int> Positions() const;

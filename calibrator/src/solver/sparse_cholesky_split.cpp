@@ -278,8 +278,9 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
   // helper thread, it landed in that thread's heap arena, whose pages the calling thread's later
   // allocations cannot reuse (EuRoC's 36 s: the cross-validation's subset peaked 5 MB higher). The
   // first factorisation after the analysis runs the halves one after the other here (CHOLMOD's
-  // work arrays, W, D^-1/2: kept, the later ones reuse them), and a factor's values freed by
-  // ReleaseNumeric are allocated again before the threads start.
+  // work arrays, W, D^-1/2: kept, the later ones reuse them), and the values ReleaseNumeric
+  // freed (the factor's and the permuted copy of A_k) are allocated again before the threads
+  // start.
   for (Half& h : half)
     h.factor.AllocateNumeric();
   ParallelFor(first_done_ ? 2 : 1, 2, [&](std::size_t k) {
@@ -287,8 +288,7 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
     // A_k + D_k straight into the factor's permuted copy (SingleFactor::Factorize's scatter).
     const int* p = lower.outerIndexPtr();
     const int* rows = lower.innerIndexPtr();
-    std::vector<double>& values = h.factor.values_;
-    values.resize(h.factor.target_.size());
+    std::vector<double>& values = h.factor.values_;  // sized by AllocateNumeric
     std::size_t at = 0;
     for (const int j : h.global) {
       for (int e = p[j]; e < p[j + 1]; ++e) {
