@@ -31,17 +31,18 @@ bool SparseCholesky::Factorize(const SparseColMajor& lower, const Eigen::VectorX
                                bool same_pattern) {
   Impl& m = *impl_;
   // A new pattern is analysed anew: split where that pays on two threads, else one factor.
-  if (!m.analysed || (!same_pattern && (m.split != nullptr ? !m.split->SameAsAnalysed(lower)
-                                                           : !m.single.SameAsAnalysed(lower)))) {
+  // (No factor of either kind yet: the first pattern.)
+  const bool analysed = m.split != nullptr || m.single.factor_ != nullptr;
+  if (!analysed || (!same_pattern && (m.split != nullptr ? !m.split->SameAsAnalysed(lower)
+                                                         : !m.single.SameAsAnalysed(lower)))) {
     m.split.reset();
     cholmod_free_factor(&m.single.factor_, &m.single.common_);
     if (m.kind == Kind::kAuto && m.threads >= 2)
       m.split = SplitFactor::Analyze(lower);
-    m.analysed = true;
   }
   if (m.split != nullptr)
     return m.split->Factorize(lower, d);
-  return m.single.Factorize(lower, d, true);
+  return m.single.Factorize(lower, d);  // analyses the pattern when it has no factor
 }
 
 void SparseCholesky::ReleaseNumeric() {
@@ -267,29 +268,19 @@ bool SingleFactor::SameAsAnalysed(const SparseColMajor& lower) const {
     return false;
   const int* p = lower.outerIndexPtr();
   const int* rows = lower.innerIndexPtr();
-  std::vector<int> position(static_cast<std::size_t>(n));
-  for (int q = 0; q < n; ++q)
-    position[static_cast<std::size_t>(perm_[static_cast<std::size_t>(q)])] = q;
+  const std::vector<int> position = Positions();
   for (int j = 0; j < n; ++j) {
     const int b = position[static_cast<std::size_t>(j)];
     for (int k = p[j]; k < p[j + 1]; ++k) {
-      const int a = position[static_cast<std::size_t>(rows[k])];
-      const int row = upper_ ? std::min(a, b) : std::max(a, b);
-      const int col = upper_ ? std::max(a, b) : std::min(a, b);
-      const int at = target_[static_cast<std::size_t>(k)];
-      if (row_index_[static_cast<std::size_t>(at)] != row ||
-          at < col_start_[static_cast<std::size_t>(col)] ||
-          at >= col_start_[static_cast<std::size_t>(col) + 1])
+      if (!Holds(target_[static_cast<std::size_t>(k)], position[static_cast<std::size_t>(rows[k])],
+                 b))
         return false;
     }
   }
   return true;
 }
 
-bool SingleFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d,
-                             bool same_pattern) {
-  if (factor_ != nullptr && !same_pattern && !SameAsAnalysed(lower))
-    cholmod_free_factor(&factor_, &common_);
+bool SingleFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d) {
   if (factor_ == nullptr)
     Analyze(lower);
   const int n = static_cast<int>(lower.cols());

@@ -123,7 +123,9 @@ struct SingleFactor final : Factor {
   void Analyze(int n, const int* p, const int* rows, const std::vector<int>& last_set);
   void StoreUpper();
   bool SameAsAnalysed(const SparseColMajor& lower) const;
-  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d, bool same_pattern);
+  // Factors A + diag(d), analysing `lower`'s pattern first when there is no factor (the caller
+  // checks that a kept analysis is of this pattern: SameAsAnalysed).
+  bool Factorize(const SparseColMajor& lower, const Eigen::VectorXd& d);
   // Factorize's second half: values_ filled by the caller (through target_).
   bool FactorizeValues();
   // A simplicial factor's numeric part and the permuted copy of A allocated now, on the calling
@@ -228,7 +230,7 @@ struct SplitFactor final : Factor {
   std::vector<std::tuple<int, int, int>> separator_entries;  // (entry, i, j), i >= j
   Eigen::MatrixXd L_s;                                       // R_s^T (lower)
   std::vector<int> outer;                                    // the analysed pattern's column starts
-  bool first_done_ = false;  // a factorisation of this analysis has allocated its buffers
+  bool first_done = false;  // a factorisation of this analysis has allocated its buffers
 };
 
 struct SparseCholesky::Impl {
@@ -238,7 +240,6 @@ struct SparseCholesky::Impl {
   int threads = 1;
   SingleFactor single;
   std::unique_ptr<SplitFactor> split;  // when the analysis split the matrix
-  bool analysed = false;               // single or split holds the last pattern's analysis
   Factor& factor() { return split != nullptr ? static_cast<Factor&>(*split) : single; }
   const Factor& factor() const {
     return split != nullptr ? static_cast<const Factor&>(*split) : single;

@@ -283,7 +283,7 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
   // start.
   for (Half& h : half)
     h.factor.AllocateNumeric();
-  ParallelFor(first_done_ ? 2 : 1, 2, [&](std::size_t k) {
+  ParallelFor(first_done ? 2 : 1, 2, [&](std::size_t k) {
     Half& h = half[k];
     // A_k + D_k straight into the factor's permuted copy (SingleFactor::Factorize's scatter).
     const int* p = lower.outerIndexPtr();
@@ -323,7 +323,7 @@ bool SplitFactor::Factorize(const SparseColMajor& lower, const Eigen::VectorXd& 
   });
   if (!factored[0] || !factored[1])
     return false;
-  first_done_ = true;
+  first_done = true;
   Eigen::MatrixXd S = -half[0].gram - half[1].gram;
   for (const auto& [e, i, j] : separator_entries) {
     S(i, j) += v[e];
