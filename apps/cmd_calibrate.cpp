@@ -478,9 +478,14 @@ int RunCalibrate(int argc, char** argv) {
   if (const auto failed = Guarded(
           cli, log_file, [&] { result = CalibrateSpline(rig, std::move(data), options, log); }))
     return *failed;
-  if (xv_options.enabled)
-    CrossValidateResult(split, options, out_dir, log, &result.result);
-  else
+  if (xv_options.enabled) {
+    // The subsets' trajectories on the full calibration's knot spacing: the same trajectory
+    // model, compared on other data (the rule's answer on a subset's time range could differ,
+    // and is not measured again).
+    SplineCalibratorOptions subset_options = options;
+    subset_options.knot_spacing_s = result.knot_spacing_s;
+    CrossValidateResult(split, subset_options, out_dir, log, &result.result);
+  } else
     log("cross-validation off (--no-cross-validate): sigma is the formal one");
 
   const report::StageTime calibration = clock.Lap("calibration");

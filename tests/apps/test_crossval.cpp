@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
 
 #include "../calibrator/simulated_recording.h"
@@ -20,6 +21,13 @@ using test::RunCtcal;
 using test::Slurp;
 
 const std::string& kExample = test::kExampleRig;
+
+// The first match of `pattern` in `text` (empty when none); `text` must outlive it.
+std::smatch Match(const std::string& text, const char* pattern) {
+  std::smatch m;
+  std::regex_search(text, m, std::regex(pattern));
+  return m;
+}
 
 std::string Dir(const std::string& name) {
   return (std::filesystem::path(::testing::TempDir()) / ("ctcal_crossval_" + name)).string();
@@ -85,6 +93,11 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
   EXPECT_NE(log.find("cross-validation: 2 subsets of interleaved 2.0 s blocks"), std::string::npos)
       << log;
   EXPECT_NE(log.find("verdict: "), std::string::npos);
+  // The subset's trajectory on the full calibration's knots (the same model).
+  const std::smatch full = Match(log, R"(trajectory: .* knot spacing ([0-9.]+) s)");
+  const std::smatch subset = Match(log, R"(subset 1: .* knot spacing ([0-9.]+) s)");
+  ASSERT_FALSE(full.empty() || subset.empty()) << log;
+  EXPECT_EQ(full[1].str(), subset[1].str()) << log;
   ASSERT_TRUE(std::filesystem::exists(out + "/crossval/subset_1.yaml"));
   // K = 2: one subset calibrated, the rest is the full calibration's.
   EXPECT_FALSE(std::filesystem::exists(out + "/crossval/subset_2.yaml"));

@@ -120,7 +120,7 @@ CalibrationCrossValidation CrossValidateSubsets(const RigConfig& full, const Sub
       SplineCalibrationResult r =
           CalibrateSpline(start, split.subsets[j], sub, [](const std::string&) {});
       log("  " + label + ": " + std::to_string(r.iterations) + " iterations, " +
-          Fmt("%.2f s", r.total_seconds));
+          Fmt("%.2f s, knot spacing %.4f s", r.total_seconds, r.knot_spacing_s));
       xv.subsets.push_back(std::move(r.result));
     } catch (const std::exception& e) {
       xv.why_not = label + " did not calibrate: " + e.what();
