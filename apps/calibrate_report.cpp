@@ -5,6 +5,7 @@
 #include <ctime>
 #include <future>
 #include <iostream>
+#include <stdexcept>
 
 #include "cli_common.h"
 #include "ctcal/calibrator/report_data_builder.h"
@@ -32,6 +33,59 @@ report::RunInfo CalibrateRunInfo(int argc, char** argv) {
   return info;
 }
 
+namespace {
+
+// The second half of the report step, from the data as written (`stored`, the rounded tables as
+// the files hold them): the checks first, from what the report reads (result.yaml as written, the
+// stored data), so that the exit code stands even when the rendering fails; then the rendering,
+// `exact` (when valid: the writer of the exact tables, still running) waited for before the report
+// counts as written. Throws when the report cannot be rendered.
+void RenderFromStored(const std::string& out_dir, const report::ReportData& stored,
+                      const report::StageTime& written, std::future<void>* exact,
+                      const CalibrationLog& log, int threads, CalibrationVerdict* verdict) {
+  try {
+    std::vector<std::string> warnings;
+    verdict->checks = report::EvaluateChecks(LoadRig(out_dir + "/result.yaml", &warnings), stored);
+    verdict->evaluated = true;
+  } catch (const std::exception& e) {
+    verdict->error = e.what();
+  }
+  report::ReportOptions options;
+  options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
+  options.threads = threads;
+  report::ReportOutput out = report::RenderReport(out_dir, stored, options);
+  report::StageClock rest;
+  if (exact != nullptr && exact->valid())
+    exact->get();  // the writer's error, if any
+  out.stages.insert(out.stages.begin(), written);
+  out.stages.push_back(rest.Lap("exact data's rest"));
+  int fails = 0, warns = 0;
+  for (const report::Check& c : out.checks) {
+    fails += c.status == report::Status::kFail;
+    warns += c.status == report::Status::kWarn;
+  }
+  double wall = 0.0;
+  for (const report::StageTime& t : out.stages)
+    wall += t.wall_s;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "report: %d pages, %zu figures, checks %d failed / %d warnings, %.1f s",
+                out.pdf_pages, out.figure_ids.size(), fails, warns, wall);
+  log(line);
+  log("  " + report::FormatStageTimes(out.stages));
+  verdict->report_written = true;
+}
+
+// A failure of the report step: a warning, and the verdict's error when the checks were not
+// evaluated.
+void ReportFailed(const std::exception& e, const CalibrationLog& log, CalibrationVerdict* verdict) {
+  if (!verdict->evaluated && verdict->error.empty())
+    verdict->error = e.what();
+  log(std::string("warning: the report was not written: ") + e.what());
+}
+
+}  // namespace
+
 CalibrationVerdict WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
                                           const report::RunInfo& run_info,
                                           const CalibrationLog& log, int threads) {
@@ -51,43 +105,59 @@ CalibrationVerdict WriteCalibrationReport(const std::string& out_dir, report::Re
     std::future<void> exact = std::async(std::launch::async, [&out_dir, &stored] {
       report::WriteExactReportData(out_dir, stored, 1);
     });
-    const report::StageTime written = clock.Lap("report data");
-    // The checks first, from what the report reads (result.yaml as written, the stored data):
-    // the exit code stands even when the rendering below fails.
-    try {
-      std::vector<std::string> warnings;
-      verdict.checks = report::EvaluateChecks(LoadRig(out_dir + "/result.yaml", &warnings), stored);
-      verdict.evaluated = true;
-    } catch (const std::exception& e) {
-      verdict.error = e.what();
-    }
-    report::ReportOptions options;
-    options.ctcal_version = std::string(CTCAL_VERSION) + " (" + CTCAL_GIT_DESCRIBE + ")";
-    options.threads = threads;
-    report::ReportOutput out = report::RenderReport(out_dir, stored, options);
-    report::StageClock rest;
-    exact.get();  // the writer's error, if any
-    out.stages.insert(out.stages.begin(), written);
-    out.stages.push_back(rest.Lap("exact data's rest"));
-    int fails = 0, warns = 0;
-    for (const report::Check& c : out.checks) {
-      fails += c.status == report::Status::kFail;
-      warns += c.status == report::Status::kWarn;
-    }
-    double wall = 0.0;
-    for (const report::StageTime& t : out.stages)
-      wall += t.wall_s;
-    char line[256];
-    std::snprintf(line, sizeof line,
-                  "report: %d pages, %zu figures, checks %d failed / %d warnings, %.1f s",
-                  out.pdf_pages, out.figure_ids.size(), fails, warns, wall);
-    log(line);
-    log("  " + report::FormatStageTimes(out.stages));
-    verdict.report_written = true;
+    RenderFromStored(out_dir, stored, clock.Lap("report data"), &exact, log, threads, &verdict);
   } catch (const std::exception& e) {
-    if (!verdict.evaluated && verdict.error.empty())
-      verdict.error = e.what();
-    log(std::string("warning: the report was not written: ") + e.what());
+    ReportFailed(e, log, &verdict);
+  }
+  return verdict;
+}
+
+struct PendingCalibrationReport::Impl {
+  std::string out_dir;
+  CalibrationLog log;
+  int threads = 0;
+  std::future<report::ReportData> written;  // both halves of the data, the rounded returned
+};
+
+PendingCalibrationReport::PendingCalibrationReport(const std::string& out_dir,
+                                                   report::ReportData data,
+                                                   const report::RunInfo& run_info,
+                                                   const CalibrationLog& log, int threads)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->out_dir = out_dir;
+  impl_->log = log;
+  impl_->threads = threads;
+  log("report: writing " + out_dir + "/report_data/ beside the cross-validation");
+  data.run_info.insert(data.run_info.begin(), run_info.begin(), run_info.end());
+  // One thread: the caller's work (the subsets' solves) has the others. The log is the caller's
+  // thread's alone; the writer's error reaches Finish through the future.
+  impl_->written = std::async(std::launch::async, [out_dir, data = std::move(data)]() mutable {
+    report::ReportData stored = report::WriteRoundedReportData(out_dir, std::move(data), 1);
+    report::WriteExactReportData(out_dir, stored, 1);
+    return stored;
+  });
+}
+
+PendingCalibrationReport::~PendingCalibrationReport() {
+  if (impl_ != nullptr && impl_->written.valid())
+    impl_->written.wait();
+}
+
+CalibrationVerdict PendingCalibrationReport::Finish() {
+  CalibrationVerdict verdict;
+  verdict.out_dir = impl_->out_dir;
+  const CalibrationLog& log = impl_->log;
+  report::StageClock clock;
+  log("report: rendering report.html, report.pdf");
+  try {
+    if (!impl_->written.valid())
+      throw std::logic_error("PendingCalibrationReport::Finish called twice");
+    // The wait for the writer is the data's stage here (its CPU ran beside the caller's work).
+    const report::ReportData stored = impl_->written.get();
+    RenderFromStored(impl_->out_dir, stored, clock.Lap("report data"), nullptr, log, impl_->threads,
+                     &verdict);
+  } catch (const std::exception& e) {
+    ReportFailed(e, log, &verdict);
   }
   return verdict;
 }

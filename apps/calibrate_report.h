@@ -3,6 +3,7 @@
 // OUT/result.yaml stands without its report. The report's checks give the command's exit code.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,29 @@ struct CalibrationVerdict {
 CalibrationVerdict WriteCalibrationReport(const std::string& out_dir, report::ReportData data,
                                           const report::RunInfo& run_info,
                                           const CalibrationLog& log, int threads = 0);
+
+// WriteCalibrationReport in two halves, for a caller with more work before result.yaml is final
+// (the cross-validation, which changes sigmas only): the report data, which hold the full
+// calibration's residuals, trajectory and formal correlation and nothing the cross-validation
+// changes, are written to OUT/report_data/ on one thread of their own from construction; Finish
+// waits for them, then evaluates the checks and renders the report as WriteCalibrationReport does.
+// The destructor waits for the writer (a caller that returns early leaves no thread behind).
+class PendingCalibrationReport {
+ public:
+  PendingCalibrationReport(const std::string& out_dir, report::ReportData data,
+                           const report::RunInfo& run_info, const CalibrationLog& log,
+                           int threads = 0);
+  ~PendingCalibrationReport();
+  PendingCalibrationReport(const PendingCalibrationReport&) = delete;
+  PendingCalibrationReport& operator=(const PendingCalibrationReport&) = delete;
+
+  // Once: OUT/result.yaml written.
+  CalibrationVerdict Finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The exit code of `ctcal calibrate` from the verdicts of its result folders (SPEC section 8): 0
 // when every check passed or warned; 3 when a check failed, each failed check on stderr and in

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <string>
 
@@ -109,6 +110,20 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
       RunCtcal("crossval " + out + "/crossval/subset_1.yaml " + out + "/result.yaml", out + "/cv");
   EXPECT_EQ(cv.code, 0) << cv.err;
 
+  // The report data, written beside the subsets' solves, are the full calibration's: the same
+  // files as a run without cross-validation writes (run_info.csv holds the command line).
+  const auto report_data = [&out] {
+    std::map<std::string, std::string> files;
+    for (const auto& f : std::filesystem::directory_iterator(out + "/report_data")) {
+      if (f.path().filename() != "run_info.csv")
+        files[f.path().filename().string()] = Slurp(f.path().string());
+    }
+    return files;
+  };
+  EXPECT_NE(log.find("report_data/ beside the cross-validation"), std::string::npos) << log;
+  const std::map<std::string, std::string> beside = report_data();
+  EXPECT_GE(beside.size(), 5u);
+
   // Off: one log line says so and no subsets are left from the run before.
   const auto off = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +
                                 out + " --threads 2 --no-cross-validate",
@@ -117,6 +132,10 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
   EXPECT_NE(Slurp(out + "/log.txt").find("cross-validation off (--no-cross-validate)"),
             std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(out + "/crossval"));
+  const std::map<std::string, std::string> alone = report_data();
+  ASSERT_EQ(alone.size(), beside.size());
+  for (const auto& [name, bytes] : beside)
+    EXPECT_TRUE(alone.at(name) == bytes) << name << " differs";
   const auto k1 = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +
                                out + " --cross-validate --subsets 1",
                            out + "/run_k1");
