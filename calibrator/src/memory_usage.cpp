@@ -56,11 +56,12 @@ std::int64_t FreeHeapBytes() {
 bool ReleaseFreedMemory() {
 #if defined(__GLIBC__)
   // A trim returns every free page, and the stage after it touches them again, a page fault each
-  // (zeroed, on a virtual machine a trap to the host): EuRoC's 36 s freed 13-58 MB at each of its
-  // 12 calls, and returning them cost ~0.35 s of system time and 18 % of the command's wall time
-  // for a 3 MB lower peak. Held free below kTrimAboveBytes, the next stage reuses them instead.
-  // The 10 min 1 kHz recording frees 80-300 MB at 4 of its 6 calls (its loaded data, its
-  // Jacobian) and peaks where it did (868 MB; 887 MB with no trim at all).
+  // (zeroed, on a virtual machine a trap to the host): EuRoC's 36 s held 13-58 MB free at each of
+  // its 12 calls (the full calibration's and the subset's), and returning them cost ~0.27 s of
+  // system time and 16 % of the command's wall time, for no lower peak. Held free below
+  // kTrimAboveBytes, the next stage reuses them instead. The 10 min 1 kHz recording holds 80-300
+  // MB free at 4 of its 6 calls (its loaded data, a solve's Jacobian, the prepared data) and
+  // peaks where it did (868 MB; 887 MB with no trim at all).
   const std::int64_t free_bytes = FreeHeapBytes();
   if (free_bytes >= 0 && free_bytes < kTrimAboveBytes)
     return false;
