@@ -56,6 +56,15 @@ function(ctcal_test name)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)
   endif()
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-                       PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+  # Every test's temporary files under the build folder (GoogleTest's TempDir() and
+  # std::filesystem::temp_directory_path() read TMPDIR), emptied at the start of each ctest run
+  # (the ctcal_test_tmp fixture, tests/CMakeLists.txt): in /tmp a run of the suite left ~470 MB of
+  # simulated recordings, bags and outputs behind, and each run its own (their names hold the pid).
+  # (Key-value pairs: an empty LABELS would take the next key as its value.)
+  set(properties TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "TMPDIR=${CTCAL_TEST_TMPDIR}"
+                 FIXTURES_REQUIRED ctcal_test_tmp)
+  if(ARG_LABELS)
+    list(APPEND properties LABELS "${ARG_LABELS}")
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES ${properties})
 endfunction()
