@@ -143,5 +143,26 @@ TEST(CrossvalCommand, CalibrateCrossValidatesAndReportsIt) {
   EXPECT_EQ(Lines(k1.err), 1) << k1.err;
 }
 
+// OUT/report_data cannot be created (a file of that name): the calibration's result stands, the
+// checks cannot be evaluated, exit 1 with one line naming the folder, whether the data are written
+// beside the cross-validation (its writer's error reaches the report step) or after the result.
+TEST(CrossvalCommand, UnwritableReportDataIsOneLineExit1) {
+  const std::string data = test::SimulateOnce("ctcal_crossval_sim", test::FullTable4Args(3, 16));
+  for (const std::string mode : {"--cross-validate --subset-block 2", "--no-cross-validate"}) {
+    SCOPED_TRACE(mode);
+    const std::string out = Dir("unwritable");
+    std::filesystem::remove_all(out);
+    std::filesystem::create_directories(out);
+    std::ofstream(out + "/report_data") << "not a folder\n";
+    const auto r = RunCtcal("calibrate --rig " + data + "/rig.yaml --data " + data + " --out " +
+                                out + " --threads 2 " + mode,
+                            out + "_run");
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(out + "/report_data: cannot create"), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(out + "/result.yaml"));
+  }
+}
+
 }  // namespace
 }  // namespace ctcal
