@@ -6,6 +6,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdlib>
@@ -51,13 +52,24 @@ inline SimulatedRecording SimulateTable4(sim::Scenario scenario, double duration
 namespace ctcal::test {
 
 // Runs `ctcal simulate <args> --out DIR` with DIR = <gtest's temp dir>/<name> unless DIR already
-// holds a truth.yaml (so once per name); returns DIR.
+// holds a truth.yaml (so once per name); returns DIR. The recording is simulated into a folder of
+// this process' own and renamed to DIR, which is atomic: tests that ask for the same name at once
+// (ctest runs each test as a process, two at a time) never read a recording another is still
+// writing (one read a camera's 40 of 320 frames); the one whose rename finds DIR there removes its
+// copy.
 inline std::string SimulateOnce(const std::string& name, const std::string& args) {
-  const std::string dir = (std::filesystem::path(::testing::TempDir()) / name).string();
-  if (!std::filesystem::exists(dir + "/truth.yaml")) {
+  namespace fs = std::filesystem;
+  const std::string dir = (fs::path(::testing::TempDir()) / name).string();
+  if (!fs::exists(dir + "/truth.yaml")) {
+    const std::string part = dir + ".part" + std::to_string(::getpid());
+    fs::remove_all(part);
     const std::string cmd =
-        std::string(CTCAL_BINARY) + " simulate " + args + " --out " + dir + " > /dev/null";
+        std::string(CTCAL_BINARY) + " simulate " + args + " --out " + part + " > /dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::error_code ec;
+    fs::rename(part, dir, ec);
+    if (ec)
+      fs::remove_all(part);
   }
   return dir;
 }
