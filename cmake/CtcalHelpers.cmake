@@ -30,6 +30,9 @@ function(ctcal_library name)
   add_library(ctcal::${name} ALIAS ctcal_${name})
 endfunction()
 
+# Every ctcal_test's TMPDIR (below), which tests/CMakeLists.txt empties before each ctest run.
+set(CTCAL_TEST_TMPDIR ${CMAKE_BINARY_DIR}/test_tmp)
+
 # ctcal_test(NAME SOURCES a.cpp DEPS ctcal::spline [LABELS unit])
 # One GoogleTest executable per unit; each TEST becomes its own CTest test.
 function(ctcal_test name)
