@@ -32,6 +32,16 @@ void ReexecWithHugePageHeap(char** argv) {
   const std::string saved = current != nullptr ? current : "";
   if (setenv("GLIBC_TUNABLES", tunables->c_str(), 1) != 0)
     return;
+  // The program's own file by its name: the kernel names a process after the file it executes,
+  // and /proc/self/exe made that "exe" (`ps`, `top`, `pgrep ctcal` and `killall ctcal` no longer
+  // found the calibration). The link itself when its target cannot be executed (the file replaced
+  // or removed since the start: "... (deleted)").
+  std::string self(4096, '\0');
+  const ssize_t length = readlink("/proc/self/exe", self.data(), self.size() - 1);
+  if (length > 0) {
+    self.resize(static_cast<std::size_t>(length));
+    execv(self.c_str(), argv);
+  }
   execv("/proc/self/exe", argv);
   // Still here: the re-execution failed (no /proc, say). Go on in this process, as it was.
   if (current != nullptr)

@@ -13,9 +13,10 @@ namespace ctcal::app {
 // kernel gives huge pages to no one ("[never]") or to everyone already ("[always]").
 std::optional<std::string> HugePageTunables(const char* current, const std::string& thp_enabled);
 
-// Re-executes this program (/proc/self/exe, the same arguments) with HugePageTunables' value when
-// there is one; returns when there is none or the re-execution fails (the run then goes on as
-// before). glibc reads its tunables once, at start-up: setting one needs a new process image.
+// Re-executes this program with HugePageTunables' value when there is one (its file, as
+// /proc/self/exe names it, so that the process keeps its name; the same arguments); returns when
+// there is none or the re-execution fails (the run then goes on as before). glibc reads its
+// tunables once, at start-up: setting one needs a new process image.
 void ReexecWithHugePageHeap(char** argv);
 
 // Whether this process runs with glibc.malloc.hugetlb=1 (the log says so: a re-execution is not
