@@ -6,6 +6,7 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -83,12 +84,22 @@ TEST(HugePageHeap, ReexecutedCalibrationKeepsItsName) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   const std::string name = ProcFile(pid, "comm");
-  // Opening the FIFO for writing releases the reader; closing it gives it an empty file.
-  const int writer = open(fifo.c_str(), O_WRONLY);
-  if (writer >= 0)
-    close(writer);
+  // Opening the FIFO for writing releases the reader; closing it gives it an empty file. Without
+  // blocking: a calibration that never came to read it (it failed first) must not hang the test.
   int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  pid_t ended = 0;
+  while ((ended = waitpid(pid, &status, WNOHANG)) == 0) {
+    const int writer = open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+    if (writer >= 0)
+      close(writer);
+    if (std::chrono::steady_clock::now() > deadline + std::chrono::seconds(30)) {
+      kill(pid, SIGKILL);
+      ended = waitpid(pid, &status, 0);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(ended, pid);
   ASSERT_TRUE(reexecuted) << "the calibration did not re-execute itself within 30 s";
   EXPECT_EQ(name, "ctcal\n");
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << "status " << status;
