@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <system_error>
 
 namespace ctcal::app {
 
@@ -36,12 +38,10 @@ void ReexecWithHugePageHeap(char** argv) {
   // and /proc/self/exe made that "exe" (`ps`, `top`, `pgrep ctcal` and `killall ctcal` no longer
   // found the calibration). The link itself when its target cannot be executed (the file replaced
   // or removed since the start: "... (deleted)").
-  std::string self(4096, '\0');
-  const ssize_t length = readlink("/proc/self/exe", self.data(), self.size() - 1);
-  if (length > 0) {
-    self.resize(static_cast<std::size_t>(length));
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error)
     execv(self.c_str(), argv);
-  }
   execv("/proc/self/exe", argv);
   // Still here: the re-execution failed (no /proc, say). Go on in this process, as it was.
   if (current != nullptr)
