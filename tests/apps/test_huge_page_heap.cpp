@@ -14,9 +14,10 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <thread>
+
+#include "cli_test_util.h"
 
 namespace ctcal::app {
 namespace {
@@ -41,12 +42,9 @@ TEST(HugePageHeap, LeavesTheProcessAloneWhenThereIsNothingToDo) {
   EXPECT_EQ(HugePageTunables(nullptr, ""), std::nullopt);
 }
 
-// A file of /proc/<pid>/ as one string ('\0' separators kept), empty when unreadable.
+// A file of /proc/<pid>/ ('\0' separators kept), empty when unreadable.
 std::string ProcFile(pid_t pid, const char* name) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/" + name, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return test::Slurp("/proc/" + std::to_string(pid) + "/" + name);
 }
 
 // `ctcal calibrate` re-executes itself with the tunable, and the process is still named ctcal
